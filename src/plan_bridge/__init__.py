@@ -1,0 +1,1 @@
+"""plan_bridge: PDDL planning on top of SMACH (placeholder, replaced below)."""

@@ -1,0 +1,1 @@
+"""Introspection: the event stream, structure snapshots and their renderings."""

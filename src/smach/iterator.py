@@ -1,0 +1,263 @@
+"""``Iterator``: run one contained state once per item of an iterable.
+
+Each item is written to the container's userdata under ``it_label`` before the
+contained state runs; the contained state sees the userdata through a Remapper like
+in every other container (declare ``it_label`` as an input key to read it).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from typing import Any
+
+from smach.container import Container, construction_method
+from smach.exceptions import InvalidStateError, InvalidTransitionError, InvalidUserCodeError
+from smach.state import State
+from smach.user_data import Remapper, UserData
+from smach.util import key_list
+
+__all__ = ["Iterator"]
+
+
+class Iterator(Container):
+    """Loop a contained state over items; stop on a break outcome or when exhausted."""
+
+    def __init__(
+        self,
+        outcomes: Iterable[str],
+        input_keys: Iterable[str],
+        output_keys: Iterable[str],
+        it: Iterable[Any] | Callable[[], Iterable[Any]] | None = None,
+        it_label: str = "it_data",
+        exhausted_outcome: str = "exhausted",
+    ) -> None:
+        names = key_list(outcomes, "outcomes")
+        if exhausted_outcome not in names:
+            names = [*names, exhausted_outcome]
+        super().__init__(names, input_keys, output_keys)
+        self._items: Iterable[Any] | Callable[[], Iterable[Any]] = it if it is not None else ()
+        self._items_label = it_label
+        self._exhausted_outcome = exhausted_outcome
+        self._state_label: str | None = None
+        self._state: State | None = None
+        self._remapping: dict[str, str] = {}
+        self._loop_outcomes: list[str] = []
+        self._break_outcomes: list[str] = []
+        self._final_outcome_map: dict[str, str] = {}
+        self._remapper_cache: Remapper | None = None
+        self._is_running = False
+        self._index = 0
+
+    # -- construction ----------------------------------------------------------------------------
+    @construction_method
+    def set_iteritems(
+        self, it: Iterable[Any] | Callable[[], Iterable[Any]], it_label: str = "it_data"
+    ) -> None:
+        """Items to iterate: an iterable, or a callable returning one (called per run)."""
+        self._items = it
+        self._items_label = it_label
+
+    @construction_method
+    def set_contained_state(
+        self,
+        label: str,
+        state: State,
+        loop_outcomes: Iterable[str] | None = None,
+        break_outcomes: Iterable[str] | None = None,
+        final_outcome_map: Mapping[str, str] | None = None,
+        remapping: Mapping[str, str] | None = None,
+    ) -> State:
+        """Set the one state run per item.
+
+        Give ``loop_outcomes`` (every other outcome breaks) or ``break_outcomes``
+        (every other outcome loops). ``final_outcome_map`` maps the outcome that ended
+        the loop to a container outcome (unmapped outcomes pass through unchanged).
+        """
+        loops = key_list(loop_outcomes, "loop_outcomes")
+        breaks = key_list(break_outcomes, "break_outcomes")
+        if loops and breaks:
+            raise InvalidStateError(
+                f"{self._path}/{label}: give loop_outcomes or break_outcomes, not both"
+            )
+        self._adopt_child(label, state)
+        registered = state.get_registered_outcomes()
+        unknown = [o for o in [*loops, *breaks] if o not in registered]
+        if unknown:
+            raise InvalidStateError(
+                f"{self._path}/{label}: loop/break outcomes {unknown} are not outcomes of the "
+                f"state; its outcomes: {', '.join(registered)}"
+            )
+        if breaks:
+            loops = [o for o in registered if o not in breaks]
+        else:
+            breaks = [o for o in registered if o not in loops]
+        self._state_label = label
+        self._state = state
+        self._loop_outcomes = loops
+        self._break_outcomes = breaks
+        self._final_outcome_map = dict(final_outcome_map or {})
+        self._remapping = dict(remapping or {})
+        self._remapper_cache = None
+        return state
+
+    def _interface_changed(self) -> None:
+        self._remapper_cache = None
+        if self._parent is not None:
+            self._parent._interface_changed()
+
+    def _userdata_replaced(self) -> None:
+        self._remapper_cache = None
+
+    def consistency_problems(self) -> list[str]:
+        if self._state is None or self._state_label is None:
+            return [f"{self._path}: the iterator has no contained state (set_contained_state)"]
+        problems = []
+        outcomes = [*self._break_outcomes, self._exhausted_outcome]
+        for outcome in outcomes:
+            mapped = self._final_outcome_map.get(outcome, outcome)
+            if mapped not in self._outcomes:
+                problems.append(
+                    f"{self._path}/{self._state_label}: outcome {outcome!r} ends the loop as "
+                    f"{mapped!r}, which is not an outcome of the iterator: "
+                    f"{', '.join(self._outcomes)}; add it to final_outcome_map"
+                )
+        return problems
+
+    def check_consistency(self) -> None:
+        problems = self.consistency_problems()
+        if problems:
+            raise InvalidTransitionError(
+                f"iterator {self._path} is inconsistent:\n  " + "\n  ".join(problems)
+            )
+
+    # -- execution -------------------------------------------------------------------------------
+    def execute(self, parent_ud: UserData | None = None) -> str | None:  # type: ignore[override]
+        """Run the contained state once per item; return the (mapped) final outcome."""
+        remapper = self._remapper_cache
+        if remapper is None:
+            self.check_consistency()
+            assert self._state is not None and self._state_label is not None
+            remapper = self._remapper(self._state_label, self._state, self._remapping)
+            self._remapper_cache = remapper
+        state = self._state
+        label = self._state_label
+        assert state is not None and label is not None
+        if self._is_running:
+            raise InvalidStateError(f"{self._path} is already running (in another thread?)")
+        smach = __import__("smach")
+        self._is_running = True
+        try:
+            self._begin(parent_ud)
+            if self._observed():
+                self._emit_started([label])
+            items = self._items() if callable(self._items) else self._items
+            try:
+                iterator = iter(items)
+            except TypeError as exc:
+                raise InvalidUserCodeError(
+                    f"{self._path}: the items to iterate are not iterable: {items!r}"
+                ) from exc
+            outcome: str | None = self._exhausted_outcome
+            loops = frozenset(self._loop_outcomes)
+            breaks = frozenset(self._break_outcomes)
+            registered = frozenset(state.get_registered_outcomes())
+            data = self._userdata._data
+            it_label = self._items_label
+            self._index = 0
+            while not smach.is_shutdown():
+                try:
+                    item = next(iterator)
+                except StopIteration:
+                    outcome = self._exhausted_outcome
+                    break
+                except Exception as exc:
+                    raise InvalidUserCodeError(
+                        f"{self._path}: the iterable raised {type(exc).__name__} while producing "
+                        f"item {self._index}: {exc}"
+                    ) from exc
+                data[it_label] = item
+                if self._preempt_requested:
+                    state.request_preempt()
+                observed = self._observed()
+                if observed:
+                    self._emit_entered(label)
+                try:
+                    outcome = state.execute(remapper)
+                except Exception as exc:
+                    raise self._child_error(label, state, exc) from exc
+                if outcome not in registered:
+                    raise self._bad_outcome(label, state, outcome)
+                if observed:
+                    self._emit_exited(label, outcome)
+                self._index += 1
+                if self._preempt_requested:
+                    self._clear_preempt()
+                    break
+                if outcome in breaks or (loops and outcome not in loops):
+                    break
+                if observed:
+                    self._emit_transition(label, outcome, label)  # type: ignore[arg-type]
+            assert outcome is not None
+            final = self._final_outcome_map.get(outcome, outcome)
+            if final not in self._outcomes:
+                raise InvalidUserCodeError(
+                    f"{self._path}: the loop ended with {outcome!r}, which maps to no outcome of "
+                    f"the iterator: {', '.join(self._outcomes)}"
+                )
+            if self._observed():
+                self._emit_terminated([label], final)
+            self._end(parent_ud)
+            return final
+        except Exception as exc:
+            self._emit_error(exc)
+            raise
+        finally:
+            self._is_running = False
+            self._after_run()
+
+    def request_preempt(self) -> None:
+        super().request_preempt()
+        if self._is_running and self._state is not None:
+            self._state.request_preempt()
+
+    # -- introspection ---------------------------------------------------------------------------
+    def get_children(self) -> dict[str, State]:
+        if self._state is None or self._state_label is None:
+            return {}
+        return {self._state_label: self._state}
+
+    def set_initial_state(
+        self, initial_states: Sequence[str], userdata: UserData | None = None
+    ) -> None:
+        unknown = [s for s in initial_states if s != self._state_label]
+        if unknown:
+            raise InvalidStateError(f"{self._path}: unknown children {unknown}")
+        if userdata is not None:
+            self._userdata.update(userdata)
+
+    def get_initial_states(self) -> list[str]:
+        return [self._state_label] if self._state_label is not None else []
+
+    def get_active_states(self) -> list[str]:
+        return [self._state_label] if self._is_running and self._state_label else []
+
+    def get_internal_edges(self) -> list[tuple[str, str, str | None]]:
+        label = self._state_label
+        if label is None:
+            return []
+        edges: list[tuple[str, str, str | None]] = [(o, label, label) for o in self._loop_outcomes]
+        edges += [
+            (o, label, self._final_outcome_map.get(o, o)) for o in self._break_outcomes
+        ]
+        return edges
+
+    def is_running(self) -> bool:
+        return self._is_running
+
+    def _log_event(self, event: Any) -> None:
+        from smach.introspection.events import StateEntered
+
+        if isinstance(event, StateEntered):
+            __import__("smach").loginfo(f"Iterating item {self._index} of {self._path}")
+        else:
+            super()._log_event(event)

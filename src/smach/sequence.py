@@ -1,0 +1,52 @@
+"""``Sequence``: a StateMachine whose states are chained by one connector outcome."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from typing import Any
+
+from smach.container import construction_method
+from smach.exceptions import InvalidStateError
+from smach.state import State
+from smach.state_machine import StateMachine
+
+__all__ = ["Sequence"]
+
+
+class Sequence(StateMachine):
+    """States run in the order they were added; ``connector_outcome`` leads to the next.
+
+    The last state's connector outcome falls through as the container outcome of the
+    same name, so ``connector_outcome`` is normally also a container outcome.
+    """
+
+    def __init__(
+        self,
+        outcomes: Iterable[str],
+        connector_outcome: str,
+        input_keys: Iterable[str] | None = None,
+        output_keys: Iterable[str] | None = None,
+    ) -> None:
+        if not isinstance(connector_outcome, str) or not connector_outcome:
+            raise InvalidStateError(f"connector_outcome must be an outcome name, got {connector_outcome!r}")
+        super().__init__(outcomes, input_keys, output_keys)
+        self._connector_outcome = connector_outcome
+
+    @construction_method
+    def add(  # type: ignore[override]
+        self,
+        label: str,
+        state: State,
+        transitions: Mapping[str, str | None] | None = None,
+        remapping: Mapping[str, str] | None = None,
+        constants: Mapping[str, Any] | None = None,
+    ) -> State:
+        """Add ``state`` after the previously added one."""
+        connector = self._connector_outcome
+        if isinstance(state, State) and connector not in state.get_registered_outcomes():
+            raise InvalidStateError(
+                f"{self._path}/{label}: the sequence's connector outcome {connector!r} is not an "
+                f"outcome of the state; its outcomes: {', '.join(state.get_registered_outcomes())}"
+            )
+        given = dict(transitions or {})
+        return self._add(label, state, given, remapping, constants, [connector])

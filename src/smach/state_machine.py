@@ -1,0 +1,403 @@
+"""``StateMachine``: run one child at a time, follow transitions on outcomes.
+
+The transition function is "(current label, returned outcome) -> next label or
+container outcome". Before a run the machine is compiled into a table of slots
+(state, remapper, next-slot per outcome) so that each transition costs a few dict
+lookups; construction calls mark the table dirty.
+
+Preemption is lock-free on the hot path: the loop publishes the current slot before
+reading the preempt flag, and ``request_preempt`` sets the flag before reading the
+current slot, so at least one of them forwards the request to the running child.
+"""
+
+from __future__ import annotations
+
+import sys
+import threading
+from collections.abc import Iterable, Mapping, Sequence
+from typing import Any
+
+from smach.container import Container, construction_method
+from smach.exceptions import InvalidStateError, InvalidTransitionError, InvalidUserCodeError
+from smach.state import State
+from smach.user_data import Remapper, UserData
+from smach.util import key_list
+
+__all__ = ["StateMachine"]
+
+_smach: Any = None
+
+
+def _smach_module() -> Any:
+    global _smach
+    if _smach is None:
+        _smach = sys.modules["smach"]
+    return _smach
+
+
+class _Slot:
+    """A compiled child: everything one step of the loop needs."""
+
+    __slots__ = ("constants", "label", "next", "remapper", "state")
+
+    def __init__(self, label: str, state: State, remapper: Remapper, constants: dict[str, Any]):
+        self.label = label
+        self.state = state
+        self.remapper = remapper
+        self.constants = constants
+        self.next: dict[str, _Slot | str] = {}
+
+
+class StateMachine(Container):
+    """A container that runs its children one at a time, following transitions."""
+
+    def __init__(
+        self,
+        outcomes: Iterable[str],
+        input_keys: Iterable[str] | None = None,
+        output_keys: Iterable[str] | None = None,
+    ) -> None:
+        super().__init__(outcomes, input_keys, output_keys)
+        self._states: dict[str, State] = {}
+        self._transitions: dict[str, dict[str, str | None]] = {}
+        self._remappings: dict[str, dict[str, str]] = {}
+        self._constants: dict[str, dict[str, Any]] = {}
+        self._initial_state_label: str | None = None
+        self._last_added_label: str | None = None
+        # Connector outcomes of the last add_auto() that the next add() links.
+        self._connector_outcomes: list[str] = []
+        self._current_slot: _Slot | None = None
+        self._preempted_state: State | None = None
+        self._preempt_lock = threading.Lock()
+        self._is_running = False
+        self._slots: dict[str, _Slot] | None = None
+
+    # -- construction ------------------------------------------------------------------------
+    @construction_method
+    def add(
+        self,
+        label: str,
+        state: State,
+        transitions: Mapping[str, str | None] | None = None,
+        remapping: Mapping[str, str] | None = None,
+        constants: Mapping[str, Any] | None = None,
+    ) -> State:
+        """Add ``state`` under ``label``; the first added state is the initial state.
+
+        ``transitions`` maps the state's outcomes to a state label, a container outcome,
+        or ``None`` (fall through: the container returns the same outcome). Outcomes
+        not listed fall through. ``remapping`` maps state key -> container key;
+        ``constants`` are written into the container's userdata before every
+        execution of this state.
+        """
+        return self._add(label, state, transitions, remapping, constants, ())
+
+    @construction_method
+    def add_auto(
+        self,
+        label: str,
+        state: State,
+        connector_outcomes: Iterable[str],
+        transitions: Mapping[str, str | None] | None = None,
+        remapping: Mapping[str, str] | None = None,
+        constants: Mapping[str, Any] | None = None,
+    ) -> State:
+        """Add ``state``; its ``connector_outcomes`` lead to whatever is added next.
+
+        Explicit transitions win over connectors.
+        """
+        connectors = key_list(connector_outcomes, "connector_outcomes")
+        registered = state.get_registered_outcomes() if isinstance(state, State) else ()
+        missing = [o for o in connectors if o not in registered]
+        if missing:
+            raise InvalidStateError(
+                f"{self._path}/{label}: connector outcomes {missing} are not outcomes of the "
+                f"state; its outcomes: {', '.join(registered) or 'none'}"
+            )
+        return self._add(label, state, transitions, remapping, constants, connectors)
+
+    def _add(
+        self,
+        label: str,
+        state: State,
+        transitions: Mapping[str, str | None] | None,
+        remapping: Mapping[str, str] | None,
+        constants: Mapping[str, Any] | None,
+        connectors: Sequence[str],
+    ) -> State:
+        if label in self._states:
+            raise InvalidStateError(
+                f"{self._path}: a state labelled {label!r} was already added; labels must be unique"
+            )
+        self._adopt_child(label, state)
+        given = dict(transitions or {})
+        self.check_state_spec(label, state, given)
+        table: dict[str, str | None] = {o: None for o in state.get_registered_outcomes()}
+        table.update(given)
+        previous = self._last_added_label
+        if previous is not None:
+            for outcome in self._connector_outcomes:
+                self._transitions[previous][outcome] = label
+        self._states[label] = state
+        self._transitions[label] = table
+        self._remappings[label] = dict(remapping or {})
+        self._constants[label] = dict(constants or {})
+        self._connector_outcomes = [o for o in connectors if given.get(o) is None]
+        self._last_added_label = label
+        if self._initial_state_label is None:
+            self._initial_state_label = label
+        self._slots = None
+        return state
+
+    def check_state_spec(
+        self, label: str, state: State, transitions: Mapping[str, str | None]
+    ) -> None:
+        """Every transition must be keyed on an outcome the state registered."""
+        registered = state.get_registered_outcomes()
+        unknown = [o for o in transitions if o not in registered]
+        if unknown:
+            raise InvalidTransitionError(
+                f"{self._path}/{label}: transitions for {unknown}, which are not outcomes of "
+                f"the state; its outcomes: {', '.join(registered) or 'none'}"
+            )
+
+    @construction_method
+    def set_initial_state(
+        self, initial_states: Sequence[str], userdata: UserData | None = None
+    ) -> None:
+        """Start the next run in ``initial_states[0]``, merging ``userdata`` in."""
+        labels = [initial_states] if isinstance(initial_states, str) else list(initial_states)
+        if len(labels) != 1:
+            raise InvalidStateError(
+                f"{self._path}: a StateMachine has exactly one initial state, got {labels}"
+            )
+        if labels[0] not in self._states:
+            raise InvalidStateError(
+                f"{self._path}: initial state {labels[0]!r} is not a child; "
+                f"children: {', '.join(self._states) or 'none'}"
+            )
+        self._initial_state_label = labels[0]
+        if userdata is not None:
+            self._userdata.update(userdata)
+
+    def _interface_changed(self) -> None:
+        self._slots = None
+        if self._parent is not None:
+            self._parent._interface_changed()
+
+    def _userdata_replaced(self) -> None:
+        self._slots = None
+
+    # -- validation ----------------------------------------------------------------------------
+    def consistency_problems(self) -> list[str]:
+        """Every reason this machine cannot run, one line each (empty if it can)."""
+        problems: list[str] = []
+        outcomes = self._outcomes
+        if not self._states:
+            problems.append(f"{self._path}: the state machine has no states")
+            return problems
+        if self._initial_state_label is None:
+            problems.append(f"{self._path}: no initial state")
+        elif self._initial_state_label not in self._states:
+            problems.append(
+                f"{self._path}: initial state {self._initial_state_label!r} is not a child"
+            )
+        for label, table in self._transitions.items():
+            registered = self._states[label].get_registered_outcomes()
+            for outcome, target in table.items():
+                where = f"{self._path}/{label}"
+                if outcome not in registered:
+                    problems.append(
+                        f"{where}: transition on {outcome!r}, which is not an outcome of the state"
+                    )
+                elif target is None or target == "":
+                    if outcome not in outcomes:
+                        problems.append(
+                            f"{where}: outcome {outcome!r} has no transition and is not an outcome "
+                            f"of the container; map it to one of: "
+                            f"{', '.join([*self._states, *outcomes])}"
+                        )
+                elif target not in self._states and target not in outcomes:
+                    problems.append(
+                        f"{where}: outcome {outcome!r} leads to unknown target {target!r}; "
+                        f"targets: states {list(self._states)} or container outcomes "
+                        f"{list(outcomes)}"
+                    )
+        return problems
+
+    def check_consistency(self) -> None:
+        """Raise :class:`InvalidTransitionError` listing every problem, if any."""
+        problems = self.consistency_problems()
+        if problems:
+            raise InvalidTransitionError(
+                f"state machine {self._path} is inconsistent ({len(problems)} problem"
+                f"{'s' if len(problems) > 1 else ''}):\n  " + "\n  ".join(problems)
+            )
+
+    def _compile(self) -> dict[str, _Slot]:
+        self.check_consistency()
+        slots = {
+            label: _Slot(
+                label,
+                state,
+                self._remapper(label, state, self._remappings[label]),
+                self._constants[label],
+            )
+            for label, state in self._states.items()
+        }
+        for label, slot in slots.items():
+            for outcome, target in self._transitions[label].items():
+                if target is None or target == "":
+                    slot.next[outcome] = outcome
+                elif target in slots:
+                    slot.next[outcome] = slots[target]
+                else:
+                    slot.next[outcome] = target
+        self._slots = slots
+        return slots
+
+    # -- execution -------------------------------------------------------------------------------
+    def execute(self, parent_ud: UserData | None = None) -> str | None:  # type: ignore[override]
+        """Run the machine from its initial state; return the container outcome.
+
+        Returns ``None`` if ``smach.is_shutdown()`` becomes true.
+        """
+        slots = self._slots if self._slots is not None else self._compile()
+        if self._is_running:
+            raise InvalidStateError(f"{self._path} is already running (in another thread?)")
+        self._is_running = True
+        smach = _smach_module()
+        label = ""
+        try:
+            self._begin(parent_ud)
+            self._preempted_state = None
+            assert self._initial_state_label is not None
+            slot = slots[self._initial_state_label]
+            bus = self._bus
+            if bus.listeners or self._local:
+                self._emit_started([slot.label])
+            if smach.is_shutdown():
+                return None
+            while True:
+                label = slot.label
+                self._current_slot = slot  # publish before reading the flag (see module doc)
+                if self._preempt_requested:
+                    self._handle_preempt(slot.state)
+                if slot.constants:
+                    self._userdata._data.update(slot.constants)
+                observed = bus.listeners or self._local
+                if observed:
+                    self._emit_entered(label)
+                try:
+                    outcome = slot.state.execute(slot.remapper)
+                except Exception as exc:
+                    raise self._child_error(label, slot.state, exc) from exc
+                try:
+                    target = slot.next[outcome]  # type: ignore[index]
+                except (KeyError, TypeError):
+                    if outcome is None and smach.is_shutdown():
+                        return None
+                    raise self._missing_transition(slot, outcome) from None
+                if observed:
+                    self._emit_exited(label, outcome)
+                if target.__class__ is _Slot:
+                    if observed:
+                        self._emit_transition(label, outcome, target.label)  # type: ignore[union-attr]
+                    if smach.is_shutdown():
+                        return None
+                    slot = target  # type: ignore[assignment]
+                    continue
+                break
+            final: str = target  # type: ignore[assignment]
+            if self._preempt_requested and not slot.state._preempt_requested:
+                self.service_preempt()
+            self._current_slot = None
+            if bus.listeners or self._local:
+                self._emit_terminated([label], final)
+            self._end(parent_ud)
+            return final
+        except Exception as exc:
+            self._emit_error(exc)
+            raise
+        finally:
+            self._current_slot = None
+            self._is_running = False
+            self._after_run()
+
+    def _missing_transition(self, slot: _Slot, outcome: object) -> InvalidUserCodeError:
+        if outcome in slot.state.get_registered_outcomes():
+            return InvalidUserCodeError(
+                f"state {self._path}/{slot.label} returned {outcome!r}, which was registered "
+                f"after the state was added and has no transition"
+            )
+        return self._bad_outcome(slot.label, slot.state, outcome)
+
+    # -- preemption ------------------------------------------------------------------------------
+    def request_preempt(self) -> None:
+        super().request_preempt()
+        slot = self._current_slot
+        if slot is not None:
+            self._preempt_current(slot.state)
+
+    def _preempt_current(self, state: State) -> None:
+        with self._preempt_lock:
+            previous = self._preempted_state
+            if previous is state:
+                if not state._preempt_requested:
+                    state.request_preempt()
+                return
+            if previous is not None:
+                previous.recall_preempt()
+            self._preempted_state = state
+        state.request_preempt()
+
+    def _handle_preempt(self, state: State) -> None:
+        """Before running ``state`` with our flag set: let the request flow or stop it."""
+        previous = self._preempted_state
+        if previous is None or previous._preempt_requested:
+            # Nobody has handled the request yet: it flows to the next state.
+            self._preempt_current(state)
+        else:
+            # The last preempted state serviced it; it chose where to go from there.
+            self._clear_preempt()
+            self._preempted_state = None
+
+    # -- introspection -----------------------------------------------------------------------------
+    def get_children(self) -> dict[str, State]:
+        return self._states
+
+    def get_initial_states(self) -> list[str]:
+        return [self._initial_state_label] if self._initial_state_label is not None else []
+
+    def get_active_states(self) -> list[str]:
+        slot = self._current_slot
+        return [slot.label] if slot is not None else []
+
+    def get_internal_edges(self) -> list[tuple[str, str, str | None]]:
+        return [
+            (outcome, label, target if target != "" else None)
+            for label, table in self._transitions.items()
+            for outcome, target in table.items()
+        ]
+
+    def is_running(self) -> bool:
+        return self._is_running
+
+    def _log_event(self, event: Any) -> None:
+        from smach.introspection.events import ContainerStarted, ContainerTerminated, Transition
+
+        smach = _smach_module()
+        if isinstance(event, ContainerStarted):
+            smach.loginfo(
+                f"State machine starting in initial state '{event.initial_states[0]}' with "
+                f"userdata: \n\t{list(self._userdata.keys())}"
+            )
+        elif isinstance(event, Transition):
+            smach.loginfo(
+                f"State machine transitioning '{event.source}':'{event.outcome}'-->'{event.target}'"
+            )
+        elif isinstance(event, ContainerTerminated):
+            smach.loginfo(
+                f"State machine terminating '{event.terminal_states[0]}':'{event.outcome}':"
+                f"'{event.outcome}'"
+            )

@@ -1,0 +1,310 @@
+"""Userdata: the scoped key/value store each container owns.
+
+:class:`UserData` is a dictionary with attribute access. A child state never sees a
+container's ``UserData`` directly but through a :class:`Remapper`, which enforces
+the keys the state declared and translates state-local names to container names.
+Values are shared by reference, never copied. Single reads and writes are atomic
+(they are one dict operation under the GIL); the original's per-key locks added no
+guarantee beyond that and are not reproduced.
+"""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Iterable, Iterator, Mapping
+from typing import TYPE_CHECKING, Any
+
+from smach.exceptions import InvalidUserCodeError, UndeclaredKeyError, UserDataKeyError
+from smach.introspection.events import UserdataWritten, stamp
+
+if TYPE_CHECKING:
+    from smach.state import State
+
+__all__ = ["Const", "Remapper", "UserData", "get_const"]
+
+_MISSING = object()
+
+
+class UserData:
+    """A dictionary with attribute access: ``ud.x``, ``ud['x']``, ``'x' in ud``."""
+
+    __slots__ = ("_data",)
+
+    _data: dict[str, Any]
+
+    def __init__(self, data: Mapping[str, Any] | None = None) -> None:
+        object.__setattr__(self, "_data", dict(data) if data else {})
+
+    # -- dictionary protocol -------------------------------------------------
+    def __getattr__(self, name: str) -> Any:
+        # Only called when normal lookup fails, i.e. for user keys.
+        if name.startswith("__"):
+            raise AttributeError(name)
+        value = self._data.get(name, _MISSING)
+        if value is _MISSING:
+            raise UserDataKeyError(name, self._data)
+        return value
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if name.startswith("_"):
+            object.__setattr__(self, name, value)
+        else:
+            self._data[name] = value
+
+    def __getitem__(self, key: str) -> Any:
+        value = self._data.get(key, _MISSING)
+        if value is _MISSING:
+            raise UserDataKeyError(key, self._data)
+        return value
+
+    def __setitem__(self, key: str, value: Any) -> None:
+        self._data[key] = value
+
+    def __delitem__(self, key: str) -> None:
+        if key not in self._data:
+            raise UserDataKeyError(key, self._data)
+        del self._data[key]
+
+    def __contains__(self, key: object) -> bool:
+        return key in self._data
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(list(self._data))
+
+    def __len__(self) -> int:
+        return len(self._data)
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self._data!r})"
+
+    def keys(self) -> list[str]:
+        return list(self._data)
+
+    def items(self) -> list[tuple[str, Any]]:
+        return list(self._data.items())
+
+    def get(self, key: str, default: Any = None) -> Any:
+        return self._data.get(key, default)
+
+    def update(self, other: UserData | Mapping[str, Any]) -> None:
+        """Merge another userdata (or a mapping) into this one, overwriting."""
+        if isinstance(other, UserData):
+            for key in other.keys():
+                self[key] = other[key]
+        else:
+            for key, value in other.items():
+                self[key] = value
+
+    def to_dict(self) -> dict[str, Any]:
+        """A shallow copy of the contents."""
+        return dict(self._data)
+
+    # -- kept from the original, unused by the library -------------------------
+    def extract(self, keys: Iterable[str], remapping: Mapping[str, str]) -> UserData:
+        ud = UserData()
+        reverse = {v: k for k, v in remapping.items()}
+        for k in keys:
+            ud[reverse.get(k, k)] = copy.copy(self[k])
+        return ud
+
+    def merge(self, ud: UserData, keys: Iterable[str], remapping: Mapping[str, str]) -> None:
+        for k in keys:
+            self[remapping.get(k, k)] = copy.copy(ud[k])
+
+    def __getstate__(self) -> dict[str, Any]:
+        return self._data
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        object.__setattr__(self, "_data", state)
+
+
+_PLAIN = frozenset({int, float, str, bool, bytes, type(None), tuple, list, dict, set, frozenset})
+
+
+class Const:
+    """A read-only view of an object given to a state through an input-only key.
+
+    Reading attributes works (and wraps nested objects again); setting or deleting an
+    attribute raises :class:`InvalidUserCodeError`. Methods that mutate (``append``)
+    pass through, as in the original.
+    """
+
+    __slots__ = ("_Const__obj",)
+
+    def __init__(self, obj: Any) -> None:
+        object.__setattr__(self, "_Const__obj", obj)
+
+    def __getattr__(self, name: str) -> Any:
+        return get_const(getattr(self.__obj, name))
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        raise InvalidUserCodeError(
+            f"cannot set attribute {name!r} of {type(self.__obj).__name__}: it was read through "
+            "an input-only userdata key; declare the key as an output or io key to modify it"
+        )
+
+    def __delattr__(self, name: str) -> None:
+        raise InvalidUserCodeError(
+            f"cannot delete attribute {name!r}: the object was read through an input-only key"
+        )
+
+    def __getitem__(self, key: Any) -> Any:
+        return get_const(self.__obj[key])
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, Const):
+            other = object.__getattribute__(other, "_Const__obj")
+        return bool(self.__obj == other)
+
+    def __hash__(self) -> int:
+        return hash(self.__obj)
+
+    def __repr__(self) -> str:
+        return f"Const({self.__obj!r})"
+
+
+def get_const(obj: Any) -> Any:
+    """Wrap objects that have attributes of their own in :class:`Const`."""
+    if type(obj) in _PLAIN or not hasattr(obj, "__dict__") or callable(obj):
+        return obj
+    return Const(obj)
+
+
+class Remapper(UserData):
+    """The view a state gets of its container's userdata.
+
+    ``remapping`` maps state-local key -> container key. Reading a key that is not a
+    declared input key, or writing one that is not a declared output key, raises
+    :class:`InvalidUserCodeError` naming the state and its declared keys.
+    """
+
+    __slots__ = ("_in", "_out", "_owner", "_remap", "_rw", "_ud", "_writer")
+
+    _ud: UserData
+    _in: frozenset[str]
+    _out: frozenset[str]
+    _rw: frozenset[str]
+    _remap: dict[str, str]
+    _owner: State | None
+    _writer: str
+
+    def __init__(
+        self,
+        ud: UserData,
+        input_keys: Iterable[str] = (),
+        output_keys: Iterable[str] = (),
+        remapping: Mapping[str, str] | None = None,
+        *,
+        owner: State | None = None,
+        writer: str = "",
+    ) -> None:
+        set_ = object.__setattr__
+        set_(self, "_ud", ud)
+        set_(self, "_in", frozenset(input_keys))
+        set_(self, "_out", frozenset(output_keys))
+        set_(self, "_rw", self._in & self._out)
+        set_(self, "_remap", dict(remapping) if remapping else {})
+        set_(self, "_owner", owner)
+        set_(self, "_writer", writer)
+
+    @property
+    def _data(self) -> dict[str, Any]:  # type: ignore[override]
+        # Code ported from the original sometimes pokes ``ud._data``.
+        return self._ud._data
+
+    def _who(self) -> str:
+        if self._owner is not None and self._writer:
+            return f"state {self._owner._path}/{self._writer}"
+        return f"state {self._writer!r}" if self._writer else "this state"
+
+    def _read(self, key: str) -> Any:
+        if key not in self._in:
+            declared = ", ".join(sorted(self._in)) or "none"
+            raise UndeclaredKeyError(
+                f"{self._who()} read userdata key {key!r}, which is not declared as an input "
+                f"key; declared input keys: {declared}"
+            )
+        target = self._remap.get(key, key)
+        value = self._ud._data.get(target, _MISSING)
+        if value is _MISSING:
+            where = f" (remapped to {target!r})" if target != key else ""
+            raise UserDataKeyError(key + where, self._ud._data)
+        if key in self._rw:
+            return value
+        return get_const(value)
+
+    def _write(self, key: str, value: Any) -> None:
+        if key not in self._out:
+            declared = ", ".join(sorted(self._out)) or "none"
+            raise InvalidUserCodeError(
+                f"{self._who()} wrote userdata key {key!r}, which is not declared as an output "
+                f"key; declared output keys: {declared}"
+            )
+        target = self._remap.get(key, key)
+        self._ud._data[target] = value
+        owner = self._owner
+        if owner is not None and owner._bus.listeners:
+            t, thread = stamp()
+            owner._bus.emit(
+                UserdataWritten(
+                    path=owner._path, time=t, thread=thread, key=target, value=value, writer=self._writer
+                )
+            )
+
+    def __getattr__(self, name: str) -> Any:
+        if name.startswith("__"):
+            raise AttributeError(name)
+        return self._read(name)
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if name.startswith("_"):
+            object.__setattr__(self, name, value)
+        else:
+            self._write(name, value)
+
+    def __getitem__(self, key: str) -> Any:
+        return self._read(key)
+
+    def __setitem__(self, key: str, value: Any) -> None:
+        self._write(key, value)
+
+    def __delitem__(self, key: str) -> None:
+        raise InvalidUserCodeError(f"{self._who()} cannot delete userdata key {key!r}")
+
+    def __contains__(self, key: object) -> bool:
+        if key not in self._in:
+            return False
+        return self._remap.get(key, key) in self._ud._data  # type: ignore[arg-type]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.keys())
+
+    def __len__(self) -> int:
+        return len(self.keys())
+
+    def __repr__(self) -> str:
+        return f"Remapper(in={sorted(self._in)}, out={sorted(self._out)}, remap={self._remap})"
+
+    def keys(self) -> list[str]:
+        """The state-local names of the declared input keys that have a value."""
+        data = self._ud._data
+        return [k for k in sorted(self._in) if self._remap.get(k, k) in data]
+
+    def items(self) -> list[tuple[str, Any]]:
+        return [(k, self._read(k)) for k in self.keys()]
+
+    def get(self, key: str, default: Any = None) -> Any:
+        if key in self:
+            return self._read(key)
+        if key not in self._in:
+            self._read(key)  # raises the undeclared-key error
+        return default
+
+    def update(self, other: UserData | Mapping[str, Any]) -> None:
+        self._ud.update(other)
+
+    def to_dict(self) -> dict[str, Any]:
+        return dict(self.items())
+
+    def __getstate__(self) -> dict[str, Any]:
+        raise TypeError("a Remapper is a view of its container's userdata and cannot be pickled")
