@@ -27,13 +27,25 @@ from smach.exceptions import (
     InvalidUserCodeError,
     SmachError,
 )
+from smach.introspection.render import to_dot, to_mermaid
+from smach.introspection.structure import StateNode, snapshot
 from smach.iterator import Iterator
 from smach.log import logdebug, logerr, loginfo, logwarn, set_loggers
+from smach.retry import Retry
 from smach.sequence import Sequence
 from smach.state import CBState, State
 from smach.state_machine import StateMachine
+from smach.timeout import Timeout
 from smach.user_data import Remapper, UserData
-from smach.util import CBInterface, cb_interface, has_smach_interface, is_shutdown, set_shutdown_check
+from smach.util import (
+    CBInterface,
+    cb_interface,
+    has_smach_interface,
+    is_shutdown,
+    set_shutdown_check,
+)
+from smach.validation import ValidationReport, validate
+from smach.wrapper import Wrapper
 
 __version__ = "0.1.0"
 
@@ -48,11 +60,16 @@ __all__ = [
     "InvalidUserCodeError",
     "Iterator",
     "Remapper",
+    "Retry",
     "Sequence",
     "SmachError",
     "State",
     "StateMachine",
+    "StateNode",
+    "Timeout",
     "UserData",
+    "ValidationReport",
+    "Wrapper",
     "cb_interface",
     "concurrence",
     "container",
@@ -68,8 +85,12 @@ __all__ = [
     "sequence",
     "set_loggers",
     "set_shutdown_check",
+    "snapshot",
     "state",
     "state_machine",
+    "to_dot",
+    "to_mermaid",
     "user_data",
     "util",
+    "validate",
 ]

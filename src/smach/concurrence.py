@@ -79,8 +79,7 @@ class Concurrence(Container):
         output_keys: Iterable[str] | None = None,
         outcome_map: OutcomeMap | None = None,
         outcome_cb: Callable[[dict[str, str | None]], str | None] | None = None,
-        child_termination_cb: Callable[[dict[str, str | None]], bool | Sequence[str]]
-        | None = None,
+        child_termination_cb: Callable[[dict[str, str | None]], bool | Sequence[str]] | None = None,
     ) -> None:
         super().__init__(outcomes, input_keys, output_keys)
         names = list(self._outcomes)
@@ -104,10 +103,15 @@ class Concurrence(Container):
                     f"outcomes: {', '.join(names)}"
                 )
             normalised[container_outcome] = {
-                label: frozenset([wanted] if isinstance(wanted, str) else key_list(wanted, "outcomes"))
+                label: frozenset(
+                    [wanted] if isinstance(wanted, str) else key_list(wanted, "outcomes")
+                )
                 for label, wanted in conditions.items()
             }
-        for name, cb in (("outcome_cb", outcome_cb), ("child_termination_cb", child_termination_cb)):
+        for name, cb in (
+            ("outcome_cb", outcome_cb),
+            ("child_termination_cb", child_termination_cb),
+        ):
             if cb is not None and not callable(cb):
                 raise InvalidStateError(f"Concurrence {name} must be callable, got {cb!r}")
         self._default_outcome = default_outcome
@@ -134,12 +138,7 @@ class Concurrence(Container):
         self._children = None
         return state
 
-    def _interface_changed(self) -> None:
-        self._children = None
-        if self._parent is not None:
-            self._parent._interface_changed()
-
-    def _userdata_replaced(self) -> None:
+    def _invalidate(self) -> None:
         self._children = None
 
     def consistency_problems(self) -> list[str]:
@@ -179,7 +178,7 @@ class Concurrence(Container):
         return children
 
     # -- execution ------------------------------------------------------------------------------
-    def execute(self, parent_ud: UserData | None = None) -> str | None:  # type: ignore[override]
+    def execute(self, parent_ud: UserData | None = None) -> str | None:
         """Run all children at once; return the outcome chosen by the policy."""
         children = self._children if self._children is not None else self._compile()
         if self._run is not None:
@@ -269,9 +268,7 @@ class Concurrence(Container):
         if next(run.finished) == run.size:
             run.done.release()
 
-    def _child_finished_watched(
-        self, run: _Run, label: str, outcome: str, observed: bool
-    ) -> None:
+    def _child_finished_watched(self, run: _Run, label: str, outcome: str, observed: bool) -> None:
         """Record an outcome, tell the listeners and ask child_termination_cb, in order."""
         with run.lock:
             run.results[label] = outcome

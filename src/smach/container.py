@@ -28,7 +28,12 @@ import threading
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from typing import Any, ClassVar, Concatenate, Generic, ParamSpec, TypeVar
 
-from smach.exceptions import InvalidConstructionError, InvalidStateError, InvalidUserCodeError, SmachError
+from smach.exceptions import (
+    InvalidConstructionError,
+    InvalidStateError,
+    InvalidUserCodeError,
+    SmachError,
+)
 from smach.introspection.events import (
     ContainerStarted,
     ContainerTerminated,
@@ -125,12 +130,22 @@ class Container(State):
     @userdata.setter
     def userdata(self, value: UserData) -> None:
         if not isinstance(value, UserData):
-            raise InvalidStateError(f"userdata must be a smach.UserData, got {type(value).__name__}")
+            raise InvalidStateError(
+                f"userdata must be a smach.UserData, got {type(value).__name__}"
+            )
         self._userdata = value
-        self._userdata_replaced()
+        self._invalidate()
 
-    def _userdata_replaced(self) -> None:
-        """Hook: rebuild the children's remappers over the new userdata."""
+    def _invalidate(self) -> None:
+        """Hook: drop whatever was compiled from the children and the userdata.
+
+        Called when the userdata object is replaced and when this container's or a
+        child's interface changes; the next run rebuilds it.
+        """
+
+    def _interface_changed(self) -> None:
+        self._invalidate()
+        super()._interface_changed()
 
     def _remapper(self, label: str, state: State, remapping: Mapping[str, str] | None) -> Remapper:
         return Remapper(
@@ -251,8 +266,10 @@ class Container(State):
 
     def set_root_path(self, path: str) -> None:
         """Name this (top-level) container in event paths, e.g. ``/SM_ROOT``."""
-        if not path.startswith("/") or path.endswith("/") and path != "/":
-            raise InvalidStateError(f"a root path starts with '/' and has no trailing '/': {path!r}")
+        if not path.startswith("/") or (path.endswith("/") and path != "/"):
+            raise InvalidStateError(
+                f"a root path starts with '/' and has no trailing '/': {path!r}"
+            )
         self._adopt(self._bus, path.rstrip("/") or "")
 
     # -- events and callbacks ------------------------------------------------------------
@@ -286,7 +303,9 @@ class Container(State):
         self._call_cbs("start", self._start_cbs, (self._userdata, self.get_initial_states()))
 
     def call_transition_cbs(self) -> None:
-        self._call_cbs("transition", self._transition_cbs, (self._userdata, self.get_active_states()))
+        self._call_cbs(
+            "transition", self._transition_cbs, (self._userdata, self.get_active_states())
+        )
 
     def call_termination_cbs(self, terminal_states: Sequence[str], outcome: str | None) -> None:
         self._call_cbs(
@@ -328,7 +347,9 @@ class Container(State):
         """Write the INFO line of one of this container's events (override per type)."""
         smach = sys.modules["smach"]
         if isinstance(event, ContainerStarted):
-            smach.loginfo(f"{type(self).__name__} {self._path} starting in {list(event.initial_states)}")
+            smach.loginfo(
+                f"{type(self).__name__} {self._path} starting in {list(event.initial_states)}"
+            )
         elif isinstance(event, Transition):
             smach.loginfo(
                 f"{type(self).__name__} {self._path} transitioning "
@@ -380,7 +401,12 @@ class Container(State):
         t, thread = stamp()
         self._emit(
             Transition(
-                path=self._path, time=t, thread=thread, source=source, outcome=outcome, target=target
+                path=self._path,
+                time=t,
+                thread=thread,
+                source=source,
+                outcome=outcome,
+                target=target,
             )
         )
 

@@ -100,12 +100,7 @@ class Iterator(Container):
         self._remapper_cache = None
         return state
 
-    def _interface_changed(self) -> None:
-        self._remapper_cache = None
-        if self._parent is not None:
-            self._parent._interface_changed()
-
-    def _userdata_replaced(self) -> None:
+    def _invalidate(self) -> None:
         self._remapper_cache = None
 
     def consistency_problems(self) -> list[str]:
@@ -131,7 +126,7 @@ class Iterator(Container):
             )
 
     # -- execution -------------------------------------------------------------------------------
-    def execute(self, parent_ud: UserData | None = None) -> str | None:  # type: ignore[override]
+    def execute(self, parent_ud: UserData | None = None) -> str | None:
         """Run the contained state once per item; return the (mapped) final outcome."""
         remapper = self._remapper_cache
         if remapper is None:
@@ -196,7 +191,7 @@ class Iterator(Container):
                 if outcome in breaks or (loops and outcome not in loops):
                     break
                 if observed:
-                    self._emit_transition(label, outcome, label)  # type: ignore[arg-type]
+                    self._emit_transition(label, outcome, label)
             assert outcome is not None
             final = self._final_outcome_map.get(outcome, outcome)
             if final not in self._outcomes:
@@ -246,9 +241,7 @@ class Iterator(Container):
         if label is None:
             return []
         edges: list[tuple[str, str, str | None]] = [(o, label, label) for o in self._loop_outcomes]
-        edges += [
-            (o, label, self._final_outcome_map.get(o, o)) for o in self._break_outcomes
-        ]
+        edges += [(o, label, self._final_outcome_map.get(o, o)) for o in self._break_outcomes]
         return edges
 
     def is_running(self) -> bool:

@@ -47,13 +47,13 @@ def logerr(msg: Any) -> None:
 _DEFAULTS = {"loginfo": loginfo, "logwarn": logwarn, "logdebug": logdebug, "logerr": logerr}
 
 
-def set_loggers(info: LogFunction, warn: LogFunction, debug: LogFunction, error: LogFunction) -> None:
+def set_loggers(
+    info: LogFunction, warn: LogFunction, debug: LogFunction, error: LogFunction
+) -> None:
     """Replace the four loggers of smach (argument order as in the original SMACH)."""
     smach = sys.modules["smach"]
-    smach.loginfo = info
-    smach.logwarn = warn
-    smach.logdebug = debug
-    smach.logerr = error
+    for name, fn in (("loginfo", info), ("logwarn", warn), ("logdebug", debug), ("logerr", error)):
+        setattr(smach, name, fn)
 
 
 def info_enabled() -> bool:

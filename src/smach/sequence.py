@@ -28,12 +28,14 @@ class Sequence(StateMachine):
         output_keys: Iterable[str] | None = None,
     ) -> None:
         if not isinstance(connector_outcome, str) or not connector_outcome:
-            raise InvalidStateError(f"connector_outcome must be an outcome name, got {connector_outcome!r}")
+            raise InvalidStateError(
+                f"connector_outcome must be an outcome name, got {connector_outcome!r}"
+            )
         super().__init__(outcomes, input_keys, output_keys)
         self._connector_outcome = connector_outcome
 
     @construction_method
-    def add(  # type: ignore[override]
+    def add(
         self,
         label: str,
         state: State,

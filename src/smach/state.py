@@ -13,12 +13,15 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from smach.exceptions import InvalidStateError
 from smach.introspection.events import EventBus, PreemptRequested, PreemptServiced, stamp
 from smach.user_data import UserData
 from smach.util import has_smach_interface, key_list
+
+if TYPE_CHECKING:
+    from smach.container import Container
 
 __all__ = ["CBState", "State"]
 
@@ -34,6 +37,7 @@ class State:
     # defaults keep construction cheap for states that are never watched.
     _bus: EventBus = EventBus()
     _path: str = ""
+    _parent: Container | None = None
 
     def __init__(
         self,
@@ -45,7 +49,9 @@ class State:
         io = key_list(io_keys, "io_keys")
         self._outcomes: dict[str, None] = dict.fromkeys(key_list(outcomes, "outcomes"))
         self._input_keys: dict[str, None] = dict.fromkeys(key_list(input_keys, "input_keys") + io)
-        self._output_keys: dict[str, None] = dict.fromkeys(key_list(output_keys, "output_keys") + io)
+        self._output_keys: dict[str, None] = dict.fromkeys(
+            key_list(output_keys, "output_keys") + io
+        )
         self._preempt_requested = False
         self._preempt_event: threading.Event | None = None
 
@@ -84,7 +90,9 @@ class State:
         return tuple(self._output_keys)
 
     def _interface_changed(self) -> None:
-        """Hook: containers recompile their execution tables when this changes."""
+        """Tell the parent (which caches remappers built from our keys) to rebuild."""
+        if self._parent is not None:
+            self._parent._interface_changed()
 
     # -- preemption ----------------------------------------------------------------
     def request_preempt(self) -> None:

@@ -180,12 +180,7 @@ class StateMachine(Container):
         if userdata is not None:
             self._userdata.update(userdata)
 
-    def _interface_changed(self) -> None:
-        self._slots = None
-        if self._parent is not None:
-            self._parent._interface_changed()
-
-    def _userdata_replaced(self) -> None:
+    def _invalidate(self) -> None:
         self._slots = None
 
     # -- validation ----------------------------------------------------------------------------
@@ -257,7 +252,7 @@ class StateMachine(Container):
         return slots
 
     # -- execution -------------------------------------------------------------------------------
-    def execute(self, parent_ud: UserData | None = None) -> str | None:  # type: ignore[override]
+    def execute(self, parent_ud: UserData | None = None) -> str | None:
         """Run the machine from its initial state; return the container outcome.
 
         Returns ``None`` if ``smach.is_shutdown()`` becomes true.
@@ -289,26 +284,27 @@ class StateMachine(Container):
                 if observed:
                     self._emit_entered(label)
                 try:
-                    outcome = slot.state.execute(slot.remapper)
+                    # Typed str: anything else fails the lookup below and is reported.
+                    outcome: str = slot.state.execute(slot.remapper)  # type: ignore[assignment]
                 except Exception as exc:
                     raise self._child_error(label, slot.state, exc) from exc
                 try:
-                    target = slot.next[outcome]  # type: ignore[index]
+                    target = slot.next[outcome]
                 except (KeyError, TypeError):
                     if outcome is None and smach.is_shutdown():
                         return None
                     raise self._missing_transition(slot, outcome) from None
                 if observed:
                     self._emit_exited(label, outcome)
-                if target.__class__ is _Slot:
+                if isinstance(target, _Slot):
                     if observed:
-                        self._emit_transition(label, outcome, target.label)  # type: ignore[union-attr]
+                        self._emit_transition(label, outcome, target.label)
                     if smach.is_shutdown():
                         return None
-                    slot = target  # type: ignore[assignment]
+                    slot = target
                     continue
                 break
-            final: str = target  # type: ignore[assignment]
+            final = target
             if self._preempt_requested and not slot.state._preempt_requested:
                 self.service_preempt()
             self._current_slot = None

@@ -89,7 +89,7 @@ class UserData:
     def update(self, other: UserData | Mapping[str, Any]) -> None:
         """Merge another userdata (or a mapping) into this one, overwriting."""
         if isinstance(other, UserData):
-            for key in other.keys():
+            for key in other:
                 self[key] = other[key]
         else:
             for key, value in other.items():
@@ -247,7 +247,12 @@ class Remapper(UserData):
             t, thread = stamp()
             owner._bus.emit(
                 UserdataWritten(
-                    path=owner._path, time=t, thread=thread, key=target, value=value, writer=self._writer
+                    path=owner._path,
+                    time=t,
+                    thread=thread,
+                    key=target,
+                    value=value,
+                    writer=self._writer,
                 )
             )
 
@@ -274,7 +279,7 @@ class Remapper(UserData):
     def __contains__(self, key: object) -> bool:
         if key not in self._in:
             return False
-        return self._remap.get(key, key) in self._ud._data  # type: ignore[arg-type]
+        return self._remap.get(key, key) in self._ud._data
 
     def __iter__(self) -> Iterator[str]:
         return iter(self.keys())

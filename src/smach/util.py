@@ -9,7 +9,13 @@ from typing import Any
 
 from smach.exceptions import InvalidStateError
 
-__all__ = ["CBInterface", "cb_interface", "has_smach_interface", "is_shutdown", "set_shutdown_check"]
+__all__ = [
+    "CBInterface",
+    "cb_interface",
+    "has_smach_interface",
+    "is_shutdown",
+    "set_shutdown_check",
+]
 
 
 def is_shutdown() -> bool:
@@ -19,7 +25,7 @@ def is_shutdown() -> bool:
 
 def set_shutdown_check(cb: Callable[[], bool]) -> None:
     """Install ``cb`` as ``smach.is_shutdown`` (checked by containers between states)."""
-    sys.modules["smach"].is_shutdown = cb
+    setattr(sys.modules["smach"], "is_shutdown", cb)  # noqa: B010  (ModuleType has no such attribute for mypy)
 
 
 def key_list(value: Iterable[str] | None, what: str) -> list[str]:
@@ -37,7 +43,9 @@ def key_list(value: Iterable[str] | None, what: str) -> list[str]:
     items = list(value)
     for item in items:
         if not isinstance(item, str):
-            raise InvalidStateError(f"{what} must contain strings, got {item!r} ({type(item).__name__})")
+            raise InvalidStateError(
+                f"{what} must contain strings, got {item!r} ({type(item).__name__})"
+            )
     return items
 
 
@@ -103,5 +111,9 @@ def has_smach_interface(obj: object) -> bool:
     """True if ``obj`` declares outcomes and keys the SMACH way."""
     return all(
         hasattr(obj, name)
-        for name in ("get_registered_input_keys", "get_registered_output_keys", "get_registered_outcomes")
+        for name in (
+            "get_registered_input_keys",
+            "get_registered_output_keys",
+            "get_registered_outcomes",
+        )
     )

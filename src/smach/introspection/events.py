@@ -171,6 +171,6 @@ class EventBus:
                 listener(event)
             except Exception as exc:
                 self.remove(listener)
-                import smach  # noqa: PLC0415  (the module attribute is looked up at call time)
+                import smach
 
                 smach.logerr(f"event listener {listener!r} raised {exc!r}; it was detached")

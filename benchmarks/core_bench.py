@@ -1,0 +1,742 @@
+"""Benchmark of the smach core, with peers and floors measured in the same run.
+
+Usage::
+
+    .venv/bin/python benchmarks/core_bench.py            # full run (about a minute)
+    .venv/bin/python benchmarks/core_bench.py --quick    # small sizes, a few seconds
+    .venv/bin/python benchmarks/core_bench.py --json results.json
+
+Every scenario is timed in repeated trials; each trial runs the scenario enough times
+to last at least ``min_trial_s`` (gc disabled inside the timed region, as ``timeit``
+does), and the table reports the median, the minimum and the 90th percentile of the
+per-unit cost over the trials. Preemption latency is one sample per trial.
+
+Scenarios (names as printed in the table):
+
+* ``chain``             1000-state chain StateMachine of trivial states, us/transition
+* ``remap_loop``        2-state loop, each state reads and writes a remapped key, us/transition
+* ``concurrence``       Concurrence of 8 trivial children, us/execution
+* ``concurrence_busy``  the same while a separate busy-loop process occupies a core
+* ``iterator_small`` / ``iterator_medium`` / ``iterator_large``
+                        Iterator over 1,000 / 10,000 / 100,000 items, us/item
+* ``nested``            50 StateMachines nested in each other, one leaf, us/execution
+* ``preempt_event``     latency request_preempt() -> execute() returns, state waits on
+                        ``self.preempt_event.wait()``, ms
+* ``preempt_sleep``     the same, state in ``self.sleep(10)``, ms
+* ``preempt_poll``      the same, state polls ``preempt_requested()`` every 1 ms, ms
+* ``call_function`` / ``call_method``  a bare Python call (loop overhead subtracted), us
+* ``handloop``          a hand-written minimal transition loop (the pure-Python floor of
+                        ``chain``: execute() + one dict lookup + one class check), us
+* ``peer_py_trees``     py_trees Sequence(memory=True) of 1000 Success behaviours,
+                        ticked once at the root, us/behaviour
+* ``peer_transitions``  ``transitions.Machine`` toggled 10,000 times, us/change
+
+The original SMACH figures below are constants: medians of the original
+(ros/executive_smach) core measured earlier on the same machine (2 cores, Python 3.11).
+They are not re-measured here because the original needs ROS.
+"""
+
+from __future__ import annotations
+
+import argparse
+import gc
+import json
+import logging
+import math
+import multiprocessing
+import os
+import platform
+import random
+import sys
+import threading
+import time
+import timeit
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import smach
+
+# -- reference figures of the original SMACH core (measured earlier on this machine) ------------
+# Medians, same scenarios and sizes as below. Not measured by this script.
+ORIGINAL = {
+    "chain": 2.5,  # us/transition, 1000-state chain
+    "remap_loop": 3.8,  # us/transition, remapped 2-state loop
+    "concurrence": 300.0,  # us/execution, 8 trivial children
+    "concurrence_busy": (4000.0, 16000.0),  # us/execution, range seen with the other core busy
+    "iterator_medium": 410.0,  # us/item at 10,000 items (grows with the item count: quadratic)
+    "nested": 210.0,  # us/execution, 50 nested StateMachines
+    # preemption: bounded by the poll period of the state (no event to wait on)
+}
+
+# Targets for this implementation.
+SPEEDUP_TARGETS = {"chain": 4.0, "remap_loop": 4.0, "nested": 4.0, "concurrence": 10.0}
+ITERATOR_MAX_US = 2.0
+ITERATOR_LINEARITY = 1.5  # us/item of the largest run <= 1.5x that of the smallest
+PREEMPT_EVENT_MAX_MS = 0.2
+
+SCENARIOS = (
+    "chain",
+    "remap_loop",
+    "concurrence",
+    "concurrence_busy",
+    "iterator_small",
+    "iterator_medium",
+    "iterator_large",
+    "nested",
+    "preempt_event",
+    "preempt_sleep",
+    "preempt_poll",
+    "call_function",
+    "call_method",
+    "handloop",
+    "peer_py_trees",
+    "peer_transitions",
+)
+
+
+def progress(msg: str) -> None:
+    print(f"[core_bench] {msg}", file=sys.stderr, flush=True)
+
+
+# -- statistics ---------------------------------------------------------------------------------
+@dataclass
+class Result:
+    name: str
+    what: str
+    size: int
+    unit: str
+    samples: list[float] = field(repr=False)
+    median: float = 0.0
+    min: float = 0.0
+    p90: float = 0.0
+
+    def __post_init__(self) -> None:
+        s = sorted(self.samples)
+        n = len(s)
+        self.median = s[n // 2] if n % 2 else (s[n // 2 - 1] + s[n // 2]) / 2
+        self.min = s[0]
+        self.p90 = s[max(0, math.ceil(0.9 * n) - 1)]  # nearest rank
+
+
+@dataclass
+class Config:
+    quick: bool
+    trials: int  # timed trials per throughput scenario
+    min_trial_s: float  # minimum duration of one trial
+    chain: int
+    loop: int
+    concurrence_children: int
+    iterator_sizes: tuple[int, int, int]
+    nesting: int
+    preempt_trials: int
+    peer_py_trees: int
+    peer_transitions: int
+
+
+FULL = Config(
+    quick=False,
+    trials=21,
+    min_trial_s=0.05,
+    chain=1000,
+    loop=10_000,
+    concurrence_children=8,
+    iterator_sizes=(1_000, 10_000, 100_000),
+    nesting=50,
+    preempt_trials=200,
+    peer_py_trees=1000,
+    peer_transitions=10_000,
+)
+QUICK = Config(
+    quick=True,
+    trials=3,
+    min_trial_s=0.005,
+    chain=200,
+    loop=1_000,
+    concurrence_children=8,
+    iterator_sizes=(100, 1_000, 10_000),
+    nesting=50,
+    preempt_trials=15,
+    peer_py_trees=200,
+    peer_transitions=1_000,
+)
+
+
+def measure(
+    name: str, what: str, fn: Callable[[], object], units: int, cfg: Config, unit: str = "us"
+) -> Result:
+    """Time ``fn`` (which does ``units`` units of work) in ``cfg.trials`` trials."""
+    fn()  # warm up (compiles container tables, starts pool threads)
+    t0 = time.perf_counter()
+    fn()
+    once = max(time.perf_counter() - t0, 1e-7)
+    reps = max(1, math.ceil(cfg.min_trial_s / once))
+    samples = []
+    for _ in range(cfg.trials):
+        gc.collect()
+        gc.disable()
+        try:
+            start = time.perf_counter_ns()
+            for _ in range(reps):
+                fn()
+            elapsed = time.perf_counter_ns() - start
+        finally:
+            gc.enable()
+        samples.append(elapsed / 1000.0 / (reps * units))
+    result = Result(name, what, units, unit, samples)
+    progress(f"{name}: median {result.median:.4g} {unit} ({cfg.trials} trials x {reps} reps)")
+    return result
+
+
+# -- states -------------------------------------------------------------------------------------
+class Trivial(smach.State):
+    def __init__(self, outcome: str = "done") -> None:
+        super().__init__(outcomes=[outcome])
+        self.outcome = outcome
+
+    def execute(self, ud: Any) -> str:
+        return self.outcome
+
+
+class Copy(smach.State):
+    """Reads ``inp``, writes ``inp + 1`` to ``out``; stops the loop at ``limit``."""
+
+    def __init__(self, limit: int | None) -> None:
+        super().__init__(outcomes=["next", "done"], input_keys=["inp"], output_keys=["out"])
+        self.limit = limit
+
+    def execute(self, ud: Any) -> str:
+        value = ud.inp + 1
+        ud.out = value
+        if self.limit is not None and value >= self.limit:
+            return "done"
+        return "next"
+
+
+class ReadItem(smach.State):
+    def __init__(self) -> None:
+        super().__init__(outcomes=["continue"], input_keys=["it_data"])
+
+    def execute(self, ud: Any) -> str:
+        ud.it_data  # noqa: B018 - the read is the work
+        return "continue"
+
+
+# -- scenarios: smach ---------------------------------------------------------------------------
+def bench_chain(cfg: Config) -> Result:
+    n = cfg.chain
+    sm = smach.StateMachine(outcomes=["finished"])
+    with sm:
+        for i in range(n):
+            target = f"S{i + 1}" if i + 1 < n else "finished"
+            smach.StateMachine.add(f"S{i}", Trivial(), transitions={"done": target})
+
+    def run() -> None:
+        assert sm.execute() == "finished"
+
+    return measure("chain", f"{n}-state chain StateMachine", run, n, cfg)
+
+
+def bench_remap_loop(cfg: Config) -> Result:
+    n = cfg.loop
+    sm = smach.StateMachine(outcomes=["finished"])
+    with sm:
+        smach.StateMachine.add(
+            "A",
+            Copy(None),
+            transitions={"next": "B", "done": "finished"},
+            remapping={"inp": "x", "out": "y"},
+        )
+        smach.StateMachine.add(
+            "B",
+            Copy(n),
+            transitions={"next": "A", "done": "finished"},
+            remapping={"inp": "y", "out": "x"},
+        )
+    data = sm.userdata
+
+    def run() -> None:
+        data.x = 0
+        assert sm.execute() == "finished"
+
+    result = measure("remap_loop", f"2-state remapped loop, {n} transitions", run, n, cfg)
+    assert data.x == n, data.x  # every transition did its read and write
+    return result
+
+
+def make_concurrence(cfg: Config) -> smach.Concurrence:
+    cc = smach.Concurrence(outcomes=["done"], default_outcome="done")
+    with cc:
+        for i in range(cfg.concurrence_children):
+            smach.Concurrence.add(f"C{i}", Trivial())
+    return cc
+
+
+def bench_concurrence(cfg: Config) -> Result:
+    cc = make_concurrence(cfg)
+
+    def run() -> None:
+        assert cc.execute() == "done"
+
+    k = cfg.concurrence_children
+    return measure("concurrence", f"Concurrence of {k} trivial children", run, 1, cfg)
+
+
+def _busy_loop(ready: Any, stop: Any) -> None:
+    ready.set()
+    x = 0
+    while not stop.is_set():
+        for _ in range(100_000):
+            x += 1
+
+
+def bench_concurrence_busy(cfg: Config) -> Result:
+    cc = make_concurrence(cfg)
+
+    def run() -> None:
+        assert cc.execute() == "done"
+
+    ctx = multiprocessing.get_context("spawn")
+    ready, stop = ctx.Event(), ctx.Event()
+    proc = ctx.Process(target=_busy_loop, args=(ready, stop), name="core_bench-busy", daemon=True)
+    proc.start()
+    try:
+        if not ready.wait(30):
+            raise RuntimeError("the busy-loop process did not start")
+        time.sleep(0.05)
+        progress(f"busy-loop process {proc.pid} running")
+        k = cfg.concurrence_children
+        return measure(
+            "concurrence_busy", f"Concurrence of {k}, other core busy (process)", run, 1, cfg
+        )
+    finally:
+        stop.set()
+        proc.join(5)
+        if proc.is_alive():
+            proc.terminate()
+            proc.join(5)
+        progress(f"busy-loop process stopped (exit code {proc.exitcode})")
+
+
+def bench_iterator(cfg: Config, name: str, n: int) -> Result:
+    items = list(range(n))
+    it = smach.Iterator(
+        outcomes=["done"],
+        input_keys=[],
+        output_keys=[],
+        it=items,
+        it_label="it_data",
+        exhausted_outcome="done",
+    )
+    with it:
+        smach.Iterator.set_contained_state("READ", ReadItem(), loop_outcomes=["continue"])
+
+    def run() -> None:
+        assert it.execute() == "done"
+
+    return measure(name, f"Iterator over {n} items", run, n, cfg)
+
+
+def bench_nested(cfg: Config) -> Result:
+    depth = cfg.nesting
+    inner: smach.State = Trivial()
+    for _ in range(depth):
+        sm = smach.StateMachine(outcomes=["done"])
+        with sm:
+            smach.StateMachine.add("CHILD", inner, transitions={"done": "done"})
+        inner = sm
+    root = inner
+
+    def run() -> None:
+        assert root.execute() == "done"
+
+    return measure("nested", f"{depth} nested StateMachines + leaf", run, 1, cfg)
+
+
+# -- scenarios: preemption latency --------------------------------------------------------------
+class WaitEvent(smach.State):
+    def __init__(self, started: threading.Event) -> None:
+        super().__init__(outcomes=["preempted"])
+        self.started = started
+
+    def execute(self, ud: Any) -> str:
+        event = self.preempt_event
+        self.started.set()
+        event.wait()
+        self.service_preempt()
+        return "preempted"
+
+
+class SleepState(WaitEvent):
+    def execute(self, ud: Any) -> str:
+        self.started.set()
+        while not self.sleep(10.0):
+            pass
+        self.service_preempt()
+        return "preempted"
+
+
+class PollState(WaitEvent):
+    def execute(self, ud: Any) -> str:
+        self.started.set()
+        while not self.preempt_requested():
+            time.sleep(0.001)
+        self.service_preempt()
+        return "preempted"
+
+
+def bench_preempt(cfg: Config, name: str, cls: type[WaitEvent], what: str) -> Result:
+    """One sample per trial: request_preempt() from another thread -> execute() returns."""
+    started = threading.Event()
+    sm = smach.StateMachine(outcomes=["preempted"])
+    with sm:
+        smach.StateMachine.add("WAIT", cls(started), transitions={"preempted": "preempted"})
+    rng = random.Random(1234)  # the request lands at a random point of the poll period
+    samples = []
+    for i in range(cfg.preempt_trials + 3):  # the first 3 are warm-up
+        started.clear()
+        delay = rng.uniform(0.001, 0.003)
+        stamp: list[float] = []
+
+        def requester(delay: float = delay, stamp: list[float] = stamp) -> None:
+            started.wait()
+            time.sleep(delay)
+            stamp.append(time.perf_counter())
+            sm.request_preempt()
+
+        thread = threading.Thread(target=requester, name="preempt-requester")
+        thread.start()
+        outcome = sm.execute()
+        end = time.perf_counter()
+        thread.join()
+        assert outcome == "preempted", outcome
+        if i >= 3:
+            samples.append((end - stamp[0]) * 1000.0)
+    result = Result(name, what, cfg.preempt_trials, "ms", samples)
+    progress(f"{name}: median {result.median:.3f} ms, p90 {result.p90:.3f} ms")
+    return result
+
+
+# -- floors -----------------------------------------------------------------------------------
+def _f() -> None:
+    pass
+
+
+class _Obj:
+    def m(self) -> None:
+        pass
+
+
+def bench_call(cfg: Config, name: str, stmt: str, what: str) -> Result:
+    """Cost of ``stmt`` with the loop overhead (an empty ``pass`` loop) subtracted."""
+    number = 200_000 if cfg.quick else 2_000_000
+    env = {"f": _f, "o": _Obj()}
+    stmt_t = timeit.Timer(stmt, globals=env)
+    empty_t = timeit.Timer("pass", globals=env)
+    samples = []
+    for _ in range(cfg.trials):
+        t = stmt_t.timeit(number)
+        e = empty_t.timeit(number)
+        samples.append(max(t - e, 0.0) / number * 1e6)
+    result = Result(name, what, number, "us", samples)
+    progress(f"{name}: median {result.median * 1000:.1f} ns")
+    return result
+
+
+class _HSlot:
+    __slots__ = ("next", "state")
+
+
+def bench_handloop(cfg: Config) -> Result:
+    """The least a transition can cost in Python: execute(), one dict lookup, one check."""
+    n = cfg.chain
+    slots = [_HSlot() for _ in range(n)]
+    for i, slot in enumerate(slots):
+        slot.state = Trivial()
+        slot.next = {"done": slots[i + 1] if i + 1 < n else "finished"}
+    first = slots[0]
+    ud = smach.UserData()
+
+    def run() -> None:
+        slot = first
+        while True:
+            target = slot.next[slot.state.execute(ud)]
+            if target.__class__ is _HSlot:
+                slot = target
+                continue
+            break
+
+    return measure("handloop", f"hand-written {n}-slot transition loop", run, n, cfg)
+
+
+# -- peers --------------------------------------------------------------------------------------
+def bench_py_trees(cfg: Config) -> Result:
+    import py_trees
+
+    n = cfg.peer_py_trees
+    root = py_trees.composites.Sequence(
+        name="root",
+        memory=True,
+        children=[py_trees.behaviours.Success(name=f"B{i}") for i in range(n)],
+    )
+    root.setup_with_descendants()
+    success = py_trees.common.Status.SUCCESS
+
+    def run() -> None:
+        root.tick_once()
+        assert root.status == success
+
+    return measure(
+        "peer_py_trees", f"py_trees {py_trees_version()} Sequence(memory=True) of {n}", run, n, cfg
+    )
+
+
+def py_trees_version() -> str:
+    from importlib.metadata import version
+
+    return version("py_trees")
+
+
+def bench_transitions(cfg: Config) -> Result:
+    import transitions
+
+    n = cfg.peer_transitions
+
+    class Model:
+        pass
+
+    model = Model()
+    transitions.Machine(
+        model=model,
+        states=["A", "B"],
+        transitions=[
+            {"trigger": "toggle", "source": "A", "dest": "B"},
+            {"trigger": "toggle", "source": "B", "dest": "A"},
+        ],
+        initial="A",
+        auto_transitions=False,
+    )
+    toggle = model.toggle  # type: ignore[attr-defined]
+
+    def run() -> None:
+        for _ in range(n):
+            toggle()
+
+    return measure(
+        "peer_transitions", f"transitions {transitions.__version__} Machine, {n} changes", run, n, cfg
+    )
+
+
+# -- report ---------------------------------------------------------------------------------------
+def fmt(value: float) -> str:
+    if value >= 100:
+        return f"{value:.0f}"
+    if value >= 10:
+        return f"{value:.1f}"
+    if value >= 1:
+        return f"{value:.2f}"
+    return f"{value:.3f}"
+
+
+def report(results: dict[str, Result], cfg: Config) -> dict[str, Any]:
+    r = results
+    out: list[str] = []
+    add = out.append
+    mode = "QUICK (small sizes, indicative only)" if cfg.quick else "full"
+    add("")
+    add(f"smach core benchmark - mode: {mode}")
+    add(
+        f"python {platform.python_version()} ({platform.python_implementation()}), "
+        f"{os.cpu_count()} cores, {platform.machine()}, {platform.system()} {platform.release()}"
+    )
+    add(f"{cfg.trials} trials per scenario (>= {cfg.min_trial_s * 1000:.0f} ms each), "
+        f"{cfg.preempt_trials} trials per preemption scenario")
+    add("")
+    head = f"{'scenario':<18} {'size':>7}  {'unit':<16} {'median':>9} {'min':>9} {'p90':>9}"
+    add(head)
+    add("-" * len(head))
+    units = {
+        "chain": "us/transition",
+        "remap_loop": "us/transition",
+        "concurrence": "us/execution",
+        "concurrence_busy": "us/execution",
+        "iterator_small": "us/item",
+        "iterator_medium": "us/item",
+        "iterator_large": "us/item",
+        "nested": "us/execution",
+        "preempt_event": "ms",
+        "preempt_sleep": "ms",
+        "preempt_poll": "ms",
+        "call_function": "ns/call",
+        "call_method": "ns/call",
+        "handloop": "us/transition",
+        "peer_py_trees": "us/behaviour",
+        "peer_transitions": "us/change",
+    }
+    for name in SCENARIOS:
+        res = r[name]
+        scale = 1000.0 if units[name].startswith("ns") else 1.0
+        size = res.size if not name.startswith("call_") else 1
+        add(
+            f"{name:<18} {size:>7}  {units[name]:<16} {fmt(res.median * scale):>9} "
+            f"{fmt(res.min * scale):>9} {fmt(res.p90 * scale):>9}"
+        )
+        if name in ("nested", "preempt_poll", "handloop"):
+            add("")
+    add("")
+
+    # Floors.
+    call = r["call_function"].median
+    add("Cost in bare Python function calls (median / median of call_function):")
+    for name in ("call_method", "handloop", "chain", "remap_loop", "iterator_medium", "nested",
+                 "concurrence"):
+        add(f"  {name:<18} = {r[name].median / call:8.1f} calls")
+    add(f"  {'nested':<18} = {r['nested'].median / (cfg.nesting + 1):.3f} us per level "
+        f"({r['nested'].median / (cfg.nesting + 1) / call:.1f} calls)")
+    add("")
+
+    # Peers.
+    peers = []
+    add("Peers (same run; ratio = peer median / our median, > 1 means smach is faster):")
+    for ours, peer, label in (
+        ("chain", "peer_py_trees", "chain transition vs py_trees behaviour"),
+        ("chain", "peer_transitions", "chain transition vs transitions change"),
+        ("remap_loop", "peer_transitions", "remapped loop transition vs transitions change"),
+    ):
+        ratio = r[peer].median / r[ours].median
+        peers.append({"ours": ours, "peer": peer, "ratio": ratio})
+        add(
+            f"  {label:<48} {fmt(r[ours].median):>7} us vs {fmt(r[peer].median):>7} us"
+            f"  -> {ratio:5.2f}x"
+        )
+    add("")
+
+    # Original.
+    add("Original SMACH core (constants: medians measured earlier on this machine):")
+    vs_original = []
+    for name in ("chain", "remap_loop", "concurrence", "concurrence_busy", "iterator_medium",
+                 "nested"):
+        ref = ORIGINAL[name]
+        ours = r[name].median
+        if isinstance(ref, tuple):
+            lo, hi = ref
+            add(f"  {name:<18} original {fmt(lo)}-{fmt(hi)} {units[name]:<13} ours {fmt(ours):>8}"
+                f"  -> {lo / ours:.0f}x-{hi / ours:.0f}x faster")
+            vs_original.append({"name": name, "original": [lo, hi], "ours": ours,
+                                "speedup": [lo / ours, hi / ours]})
+        else:
+            add(f"  {name:<18} original {fmt(ref):>9} {units[name]:<13} ours {fmt(ours):>8}"
+                f"  -> {ref / ours:.1f}x faster")
+            vs_original.append({"name": name, "original": ref, "ours": ours, "speedup": ref / ours})
+    add("  preempt            original: bounded by the state's poll period (no event to wait on)")
+    add("")
+
+    # Targets.
+    targets = []
+
+    def target(label: str, ok: bool, detail: str) -> None:
+        targets.append({"target": label, "pass": ok, "detail": detail})
+        add(f"  {'PASS' if ok else 'MISS'}  {label:<44} {detail}")
+
+    add("Targets" + (" (quick mode: sizes differ, indicative only)" if cfg.quick else "") + ":")
+    for name, factor in SPEEDUP_TARGETS.items():
+        ref = ORIGINAL[name]
+        assert isinstance(ref, float)
+        speedup = ref / r[name].median
+        target(f"{name}: >= {factor:.0f}x faster than original", speedup >= factor,
+               f"{speedup:.1f}x (needs <= {fmt(ref / factor)} {units[name]}, "
+               f"got {fmt(r[name].median)})")
+    busy_lo = ORIGINAL["concurrence_busy"][0]  # type: ignore[index]
+    speedup = busy_lo / r["concurrence_busy"].median
+    target("concurrence_busy: >= 10x vs original's best", speedup >= 10,
+           f"{speedup:.0f}x vs {fmt(busy_lo)} us (got {fmt(r['concurrence_busy'].median)} us)")
+    small, medium, large = (r[f"iterator_{s}"].median for s in ("small", "medium", "large"))
+    worst = max(small, medium, large)
+    target(f"iterator: < {ITERATOR_MAX_US:g} us/item at every size", worst < ITERATOR_MAX_US,
+           f"worst {fmt(worst)} us/item")
+    growth = large / small
+    target(f"iterator: linear (x100 items: <= {ITERATOR_LINEARITY}x us/item)",
+           growth <= ITERATOR_LINEARITY,
+           f"us/item {fmt(small)} -> {fmt(medium)} -> {fmt(large)} ({growth:.2f}x)")
+    for name in ("preempt_event", "preempt_sleep"):
+        res = r[name]
+        target(f"{name}: median latency < {PREEMPT_EVENT_MAX_MS} ms",
+               res.median < PREEMPT_EVENT_MAX_MS,
+               f"median {res.median:.3f} ms, p90 {res.p90:.3f} ms")
+    add("")
+    print("\n".join(out), flush=True)
+    return {"peers": peers, "vs_original": vs_original, "targets": targets}
+
+
+# -- main -----------------------------------------------------------------------------------------
+def run_all(cfg: Config) -> dict[str, Result]:
+    results: dict[str, Result] = {}
+
+    def keep(res: Result) -> None:
+        results[res.name] = res
+
+    progress("floors")
+    keep(bench_call(cfg, "call_function", "f()", "bare function call"))
+    keep(bench_call(cfg, "call_method", "o.m()", "trivial method call"))
+    keep(bench_handloop(cfg))
+    progress("smach scenarios")
+    keep(bench_chain(cfg))
+    keep(bench_remap_loop(cfg))
+    keep(bench_concurrence(cfg))
+    keep(bench_concurrence_busy(cfg))
+    for name, n in zip(("iterator_small", "iterator_medium", "iterator_large"), cfg.iterator_sizes):
+        keep(bench_iterator(cfg, name, n))
+    keep(bench_nested(cfg))
+    progress("preemption latency")
+    keep(bench_preempt(cfg, "preempt_event", WaitEvent, "state waits on preempt_event"))
+    keep(bench_preempt(cfg, "preempt_sleep", SleepState, "state in self.sleep(10)"))
+    keep(bench_preempt(cfg, "preempt_poll", PollState, "state polls every 1 ms"))
+    progress("peers")
+    keep(bench_py_trees(cfg))
+    keep(bench_transitions(cfg))
+    return results
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="small sizes, a few seconds")
+    parser.add_argument("--json", metavar="FILE", help="also write the results as JSON")
+    args = parser.parse_args(argv)
+    cfg = QUICK if args.quick else FULL
+
+    # No INFO logging during measurement: keep the default loggers, silence the
+    # Python loggers the libraries use (smach logs INFO only when its logger is on).
+    levels = {}
+    for logger_name in ("smach", "transitions", "py_trees"):
+        logger = logging.getLogger(logger_name)
+        levels[logger_name] = logger.level
+        logger.setLevel(logging.WARNING)
+    assert not smach.log.info_enabled(), "smach INFO logging must be off while measuring"
+
+    started = time.perf_counter()
+    try:
+        results = run_all(cfg)
+    finally:
+        for logger_name, level in levels.items():
+            logging.getLogger(logger_name).setLevel(level)
+    progress(f"done in {time.perf_counter() - started:.1f} s")
+    summary = report(results, cfg)
+
+    if args.json:
+        doc = {
+            "mode": "quick" if cfg.quick else "full",
+            "python": platform.python_version(),
+            "cores": os.cpu_count(),
+            "config": asdict(cfg),
+            "results": {name: asdict(res) for name, res in results.items()},
+            "original": {k: list(v) if isinstance(v, tuple) else v for k, v in ORIGINAL.items()},
+            **summary,
+        }
+        with open(args.json, "w", encoding="utf-8") as fh:
+            json.dump(doc, fh, indent=2)
+        progress(f"wrote {args.json}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
