@@ -246,7 +246,8 @@ def check_source(source: SourceText, *, max_depth: int = DEFAULT_MAX_DEPTH) -> N
 
 def _check_parentheses(source: SourceText, max_depth: int) -> None:
     open_offsets: list[int] = []
-    for token in source.tokens:
+    tokens = source.tokens
+    for index, token in enumerate(tokens):
         if token.text == "(":
             open_offsets.append(token.offset)
             if len(open_offsets) > max_depth:
@@ -263,12 +264,13 @@ def _check_parentheses(source: SourceText, max_depth: int) -> None:
                     token.offset,
                 )
             open_offsets.pop()
-            if not open_offsets and token is not source.tokens[-1]:
-                extra = source.tokens[source.tokens.index(token) + 1]
+            if not open_offsets and index + 1 < len(tokens):
+                line, column = source.line_col(tokens[index + 1].offset)
                 raise source.error(
-                    f"text after the end of the (define ...) form: {extra.text!r}",
-                    extra.offset,
-                    hint="a PDDL file holds exactly one (define ...) form",
+                    "unbalanced parentheses: this ')' closes the (define ...) form, but more "
+                    f"text follows at {line}:{column}",
+                    token.offset,
+                    hint="is this an extra ')'? A PDDL file holds exactly one (define ...) form",
                 )
     if open_offsets:
         innermost = open_offsets[-1]

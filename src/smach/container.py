@@ -446,10 +446,20 @@ class Container(State):
         self._copy_output_keys(parent_ud)
 
     def _after_run(self) -> None:
-        """Always called when a run ends, normally or not."""
-        if self._parent is None and self._bus.preempt_seen:
-            self._bus.preempt_seen = False
-            self._reset_preempt_tree()
+        """Always called when a run ends, normally or not.
+
+        Preempt requests still pending below this container were addressed to an
+        execution that is over: they are dropped so they cannot hit a later run of
+        those states. The container's own flag is kept (it is how an unserviced
+        request flows on to the parent's next state) unless this is the top level.
+        """
+        bus = self._bus
+        if bus.preempt_seen:
+            for child in self.get_children().values():
+                child._reset_preempt_tree()
+            if self._parent is None:
+                bus.preempt_seen = False
+                self._clear_preempt()
 
     def _child_error(self, label: str, state: State, exc: Exception) -> InvalidUserCodeError:
         """Wrap an exception raised by a child's execute(), naming the child's path."""

@@ -145,6 +145,8 @@ class Wrapper(Container):
             if self._observed():
                 self._emit_started([label])
             outcome = self.run(child, label)
+            if self._preempt_requested and not child._preempt_requested:
+                self.service_preempt()  # the child handled the request on our behalf
             if outcome not in self._outcomes:
                 raise InvalidTransitionError(
                     f"{self._path}: {type(self).__name__}.run returned {outcome!r}; outcomes: "
