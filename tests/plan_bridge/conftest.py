@@ -81,3 +81,9 @@ def doors(tmp_path: Path):  # type: ignore[no-untyped-def]
         return domain, problem
 
     return write
+
+
+@pytest.fixture
+def doors_text() -> tuple[str, str]:
+    """(domain text, problem template with {goal} and {extra} placeholders)."""
+    return DOORS_DOMAIN, DOORS_PROBLEM
