@@ -1,0 +1,94 @@
+"""Symbolic skills: run any PDDL domain against a simulated world, with faults.
+
+The simulated world holds the true facts. A symbolic skill applies its action's
+effects to it when the action succeeds, and fails (changing nothing) with probability
+``fail_rate``, drawn from a seeded random generator. Either way it reports what it
+sees of the facts its action touches, so the executive's belief follows the world.
+This makes any PDDL domain executable without writing skills.
+"""
+
+from __future__ import annotations
+
+import random
+import threading
+from collections.abc import Iterable
+
+import smach
+from plan_bridge.domain import Fact, PlanningTask
+from plan_bridge.planning import PlanStep
+from plan_bridge.semantics import ActionModel
+from plan_bridge.skills import SkillRegistry
+
+__all__ = ["SimulatedWorld", "SymbolicSkill", "symbolic_skills"]
+
+
+class SimulatedWorld:
+    """The true state of a simulated world, with seeded faults."""
+
+    def __init__(
+        self,
+        task: PlanningTask,
+        *,
+        seed: int | None = 0,
+        fail_rate: float = 0.0,
+        facts: Iterable[Fact] | None = None,
+    ) -> None:
+        if not 0.0 <= fail_rate <= 1.0:
+            raise ValueError(f"fail_rate must be between 0 and 1, got {fail_rate}")
+        self.task = task
+        self.model = ActionModel(task)
+        self.rng = random.Random(seed)
+        self.fail_rate = fail_rate
+        self._facts: set[Fact] = set(task.initial_facts if facts is None else facts)
+        self._lock = threading.Lock()
+        self.faults_injected = 0
+        self.actions_run = 0
+
+    @property
+    def facts(self) -> frozenset[Fact]:
+        with self._lock:
+            return frozenset(self._facts)
+
+    def perform(self, step: PlanStep) -> tuple[bool, list[tuple[Fact, bool]]]:
+        """Try ``step`` in the world: (succeeded?, observations of the touched facts)."""
+        ground = self.model.ground(step)
+        with self._lock:
+            self.actions_run += 1
+            state = frozenset(self._facts)
+            touched = ground.relevant_atoms(state)
+            ok = ground.applicable(state)
+            if ok and self.fail_rate and self.rng.random() < self.fail_rate:
+                self.faults_injected += 1
+                ok = False
+            if ok:
+                adds, dels = ground.effects(state)
+                self._facts.difference_update(dels)
+                self._facts.update(adds)
+            observations = [(fact, fact in self._facts) for fact in sorted(touched)]
+        return ok, observations
+
+
+class SymbolicSkill(smach.State):
+    """A skill that performs its action in a :class:`SimulatedWorld`."""
+
+    def __init__(self, world: SimulatedWorld, step: PlanStep) -> None:
+        super().__init__(
+            outcomes=["succeeded", "aborted", "preempted"], output_keys=["observations"]
+        )
+        self.world = world
+        self.step = step
+
+    def execute(self, ud: smach.UserData) -> str:
+        if self.preempt_requested():
+            self.service_preempt()
+            return "preempted"
+        ok, observations = self.world.perform(self.step)
+        ud.observations = observations
+        return "succeeded" if ok else "aborted"
+
+
+def symbolic_skills(world: SimulatedWorld, registry: SkillRegistry | None = None) -> SkillRegistry:
+    """A registry whose unregistered actions run as symbolic skills in ``world``."""
+    registry = registry or SkillRegistry()
+    registry.fallback = lambda step: SymbolicSkill(world, step)
+    return registry
