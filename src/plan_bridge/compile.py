@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import re
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import smach
@@ -78,8 +78,8 @@ class StepState(smach.Wrapper):
         self.record = StepRecord(index, ground.step)
 
     def add(
-        self, label: str, state: smach.State, remapping: dict[str, str] | None = None
-    ) -> smach.State:  # type: ignore[override]
+        self, label: str, state: smach.State, remapping: Mapping[str, str] | None = None
+    ) -> smach.State:
         added = super().add(label, state, remapping)
         remap = remapping or {}
         # Step keys are provided here; observations are consumed here: neither crosses

@@ -107,7 +107,7 @@ class ExecutionReport:
         return data
 
 
-class _Stop(Exception):
+class _Stop(Exception):  # noqa: N818  (control flow, not an error)
     """Ends the mission with an outcome and an explanation (internal control flow)."""
 
     def __init__(self, outcome: str, explanation: str) -> None:
@@ -165,7 +165,8 @@ class Executive(smach.Container):
     def get_internal_edges(self) -> list[tuple[str, str, str | None]]:
         if self._compiled is None:
             return []
-        return [(o, "PLAN", o) for o in OUTCOMES] + [
+        edges: list[tuple[str, str, str | None]] = [(o, "PLAN", o) for o in OUTCOMES]
+        return edges + [
             ("aborted", "PLAN", "PLAN"),
             ("invalid", "PLAN", "PLAN"),
         ]
@@ -193,7 +194,7 @@ class Executive(smach.Container):
             compiled.machine.request_preempt()
 
     # -- execution -------------------------------------------------------------------------
-    def execute(self, parent_ud: smach.UserData | None = None) -> str | None:  # type: ignore[override]
+    def execute(self, parent_ud: smach.UserData | None = None) -> str | None:
         """Run the mission; return succeeded / aborted / preempted."""
         if self._running:
             raise smach.InvalidStateError(f"{self.path} is already running")
