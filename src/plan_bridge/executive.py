@@ -304,7 +304,11 @@ class Executive(smach.Container):
             return f"{step} did not run"
         if record.outcome == "invalid":
             return f"{step} cannot start: unmet preconditions {', '.join(record.unmet)}"
-        detail = f" (skill outcome {record.skill_outcome!r})" if record.skill_outcome else ""
+        detail = (
+            f" (skill outcome {record.skill_outcome!r})"
+            if record.skill_outcome and record.skill_outcome != record.outcome
+            else ""
+        )
         seen = (
             f"; observed {', '.join(record.observations_changed)}"
             if record.observations_changed

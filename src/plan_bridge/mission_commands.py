@@ -1,0 +1,298 @@
+"""The ``run`` and ``check`` subcommands of ``plan-bridge``.
+
+Only argparse configuration happens at import time; everything heavy (unified-
+planning, smach, the domain's code) is imported when a command runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from typing import TYPE_CHECKING, Any, TextIO
+
+from plan_bridge.cli import (
+    EXIT_BAD_INPUT,
+    EXIT_FAILED,
+    EXIT_OK,
+    Command,
+    fail,
+    positive_seconds,
+    register,
+)
+
+if TYPE_CHECKING:
+    from plan_bridge.mission import Target
+    from smach.introspection.events import Event
+
+__all__ = ["ProgressPrinter"]
+
+DEFAULT_FAIL_RATE = 0.1
+
+
+def _probability(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected a probability between 0 and 1, got {text!r}"
+        ) from None
+    if not 0.0 <= value <= 1.0:
+        raise argparse.ArgumentTypeError(f"expected a probability between 0 and 1, got {text!r}")
+    return value
+
+
+def _non_negative_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
+    return value
+
+
+def _configure_target(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "target", metavar="TARGET", help="a domain folder (domains/NAME) or a domain.pddl"
+    )
+    parser.add_argument(
+        "--problem",
+        metavar="FILE",
+        help="problem file (or the name of one in the folder's problems/); required for a domain.pddl",
+    )
+
+
+def _configure_run(parser: argparse.ArgumentParser) -> None:
+    _configure_target(parser)
+    parser.add_argument(
+        "--planner",
+        default="fast-downward",
+        help="unified-planning engine (default: fast-downward)",
+    )
+    parser.add_argument(
+        "--seed", type=_non_negative_int, default=0, help="seed of the simulated faults (default 0)"
+    )
+    parser.add_argument(
+        "--fail-rate",
+        type=_probability,
+        default=None,
+        help=f"probability that an action fails in the simulated world (default: {DEFAULT_FAIL_RATE} for "
+        "domain folders with skills, 0 for symbolic skills)",
+    )
+    parser.add_argument(
+        "--max-replans",
+        type=_non_negative_int,
+        default=10,
+        help="planner calls after the first (default 10)",
+    )
+    parser.add_argument(
+        "--policy", default="full", help="recovery policy: full, no-replan, retry-only, replan-only"
+    )
+    parser.add_argument(
+        "--timeout",
+        type=positive_seconds,
+        default=60.0,
+        help="hard limit of one planner call, seconds",
+    )
+    parser.add_argument(
+        "--concurrent", action="store_true", help="run independent steps concurrently"
+    )
+    parser.add_argument("--journal", metavar="FILE", help="write every event as JSON lines to FILE")
+    parser.add_argument(
+        "--json", action="store_true", help="print one JSON object with the results"
+    )
+    parser.add_argument("--quiet", action="store_true", help="no progress output")
+
+
+def _load(args: argparse.Namespace) -> Target:
+    from plan_bridge.mission import load_target
+
+    return load_target(args.target, args.problem)
+
+
+def _run(args: argparse.Namespace) -> int:
+    from plan_bridge.errors import PlanBridgeError
+
+    started = time.monotonic()
+    try:
+        return _run_mission(args, started)
+    except PlanBridgeError as exc:
+        return fail(str(exc))
+    except OSError as exc:
+        return fail(f"{getattr(exc, 'filename', '') or ''}: {exc.strerror or exc}")
+
+
+def _run_mission(args: argparse.Namespace, started: float) -> int:
+    from dataclasses import replace
+
+    from plan_bridge.executive import Executive, ReplanPolicy
+    from plan_bridge.planning import get_planner
+    from smach.introspection.journal import Journal
+
+    try:
+        policy = replace(
+            ReplanPolicy.named(args.policy),
+            max_replans=args.max_replans,
+            planner_timeout=args.timeout,
+        )
+    except ValueError as exc:
+        return fail(str(exc))
+    target = _load(args)
+    symbolic = target.module is None or not hasattr(target.module, "setup")
+    fail_rate = (
+        args.fail_rate if args.fail_rate is not None else (0.0 if symbolic else DEFAULT_FAIL_RATE)
+    )
+    planner = get_planner(args.planner)
+    setup = target.setup(seed=args.seed, fail_rate=fail_rate)
+    problems = setup.skills.check(target.task)
+    if problems:
+        return fail("the skills do not fit the domain:\n  " + "\n  ".join(problems))
+    executive = Executive(
+        target.task,
+        setup.skills,
+        planner,
+        policy=policy,
+        sense=setup.sense,
+        concurrent=setup.concurrent or args.concurrent,
+    )
+    out = sys.stderr
+    if not args.quiet:
+        print(
+            f"plan-bridge run: {target.name}, problem {target.problem_path.name} "
+            f"({'symbolic skills' if symbolic else 'domain skills'}, seed {args.seed}, "
+            f"fail rate {fail_rate:g}, planner {planner.name})",
+            file=out,
+            flush=True,
+        )
+        executive.add_listener(ProgressPrinter(out))
+    journal = None
+    if args.journal:
+        journal = Journal(
+            args.journal,
+            executive,
+            header={
+                "target": str(args.target),
+                "problem": str(target.problem_path),
+                "seed": args.seed,
+                "fail_rate": fail_rate,
+                "planner": planner.name,
+            },
+        )
+    try:
+        outcome = executive.execute()
+    finally:
+        report = executive.report
+        if journal is not None:
+            journal.write_record("summary", **report.to_json())
+            journal.close()
+    world = setup.world
+    faults = getattr(world, "faults_injected", None)
+    if args.json:
+        data: dict[str, Any] = {
+            "target": target.name,
+            "problem": target.problem_path.name,
+            "seed": args.seed,
+            "fail_rate": fail_rate,
+            "planner": planner.name,
+            **report.to_json(),
+        }
+        if faults is not None:
+            data["faults_injected"] = faults
+        print(json.dumps(data, indent=None))
+    if not args.quiet:
+        print(_summary(outcome, report, faults), file=out, flush=True)
+    return EXIT_OK if report.goal_reached else EXIT_FAILED
+
+
+def _summary(outcome: str | None, report: Any, faults: int | None) -> str:
+    fault_text = f", {faults} faults injected" if faults is not None else ""
+    return (
+        f"summary: {outcome}{' (goal reached)' if report.goal_reached else ' (goal NOT reached)'}; "
+        f"{report.actions_executed} actions ({report.actions_failed} failed){fault_text}; "
+        f"{report.retries} retries, {report.continues} continues, {report.repairs} repairs, "
+        f"{report.replans} replans; {report.planner_calls} planner calls, "
+        f"planning {report.planning_time_s:.2f} s, execution {report.execution_time_s:.2f} s, "
+        f"total {report.total_time_s:.2f} s"
+        + (f"\n  reason: {report.explanation}" if not report.goal_reached else "")
+    )
+
+
+class ProgressPrinter:
+    """Prints plans, steps (with the skill's active state path) and decisions."""
+
+    def __init__(self, stream: TextIO) -> None:
+        self.stream = stream
+        self.total = 0
+
+    def __call__(self, event: Event) -> None:
+        from plan_bridge.events import ExecutiveDecision, PlanComputed, StepFinished
+        from smach.introspection.events import StateEntered
+
+        write = self.stream.write
+        if isinstance(event, PlanComputed):
+            if event.status == "solved":
+                self.total = len(event.steps)
+                write(
+                    f"[plan] {event.reason}: {len(event.steps)} steps "
+                    f"({event.planner}, {event.planning_time_s:.2f} s)\n"
+                )
+            else:
+                write(f"[plan] {event.reason}: {event.status}: {event.explanation}\n")
+        elif isinstance(event, ExecutiveDecision):
+            write(f"[{event.decision}] {event.reason}\n")
+        elif isinstance(event, StepFinished):
+            write(
+                f"  step {event.index}: {event.action} -> {event.outcome}"
+                f"{'' if event.outcome == event.skill_outcome or not event.skill_outcome else f' (skill: {event.skill_outcome})'}"
+                f" [{event.duration_s * 1000:.0f} ms]\n"
+            )
+        elif isinstance(event, StateEntered) and "/SKILL/" in event.path:
+            write(f"    {event.path}\n")
+        else:
+            return
+        self.stream.flush()
+
+
+def _configure_check(parser: argparse.ArgumentParser) -> None:
+    _configure_target(parser)
+
+
+def _check(args: argparse.Namespace) -> int:
+    from plan_bridge.errors import PlanBridgeError
+    from plan_bridge.mission import load_target
+
+    try:
+        target = _load(args)
+        problems_found: list[str] = []
+        paths = target.problems if args.problem is None else [target.problem_path]
+        for problem in paths:
+            try:
+                loaded = (
+                    load_target(args.target, problem) if problem != target.problem_path else target
+                )
+            except PlanBridgeError as exc:
+                problems_found.append(str(exc))
+                continue
+            setup = loaded.setup(seed=0, fail_rate=0.0)
+            for line in setup.skills.check(loaded.task):
+                problems_found.append(f"{problem.name}: {line}")
+            print(
+                f"{problem.name}: {len(loaded.task.actions)} actions, {len(loaded.task.objects)} objects, "
+                f"{len(loaded.task.goal_facts)} goal atoms",
+                file=sys.stderr,
+            )
+    except PlanBridgeError as exc:
+        return fail(str(exc))
+    if problems_found:
+        return fail(f"{len(problems_found)} problem(s):\n  " + "\n  ".join(problems_found))
+    print(f"{target.name}: OK ({len(paths)} problem(s) checked)")
+    return EXIT_OK
+
+
+register(Command("run", "plan and execute a mission in the simulated world", _configure_run, _run))
+register(
+    Command("check", "validate PDDL, skill bindings and outcome mappings", _configure_check, _check)
+)
+assert EXIT_BAD_INPUT == 2
