@@ -36,8 +36,8 @@ if TYPE_CHECKING:
         task_from_problem,
     )
     from plan_bridge.planning import (
-        PlanResult,
         Planner,
+        PlanResult,
         PlanStatus,
         PlanStep,
         UPPlanner,

@@ -99,7 +99,7 @@ def positive_seconds(text: str) -> float:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected seconds (a number), got {text!r}") from None
-    if not value > 0 or value != value or value == float("inf"):
+    if not (0 < value < float("inf")):  # also refuses NaN
         raise argparse.ArgumentTypeError(f"expected a positive number of seconds, got {text!r}")
     return value
 
@@ -128,8 +128,8 @@ def _configure_plan(parser: argparse.ArgumentParser) -> None:
 
 
 def _run_plan(args: argparse.Namespace) -> int:
-    from plan_bridge.errors import PlanBridgeError  # noqa: PLC0415
-    from plan_bridge.source import check_source, read_source  # noqa: PLC0415
+    from plan_bridge.errors import PlanBridgeError
+    from plan_bridge.source import check_source, read_source
 
     try:
         # Cheap checks first: bad input is reported before unified-planning loads.
@@ -138,13 +138,13 @@ def _run_plan(args: argparse.Namespace) -> int:
     except PlanBridgeError as exc:
         return fail(str(exc))
 
-    from plan_bridge.worker import default_pool  # noqa: PLC0415
+    from plan_bridge.worker import default_pool
 
     # Start the planner process now: it imports unified-planning while we parse.
     default_pool().warm_up(1)
 
-    from plan_bridge.domain import load_task  # noqa: PLC0415
-    from plan_bridge.planning import PlanStatus, get_planner  # noqa: PLC0415
+    from plan_bridge.domain import load_task
+    from plan_bridge.planning import PlanStatus, get_planner
 
     try:
         planner = get_planner(args.planner)

@@ -29,6 +29,7 @@ from plan_bridge.source import (
     check_source,
     decode_source,
     read_source,
+    replace_init,
 )
 from plan_bridge.up_runtime import ensure_unified_planning
 
@@ -141,6 +142,10 @@ class PlanningTask:
     warnings: tuple[str, ...] = ()
     type_ancestors: Mapping[str, frozenset[str]] = field(default_factory=dict)
     """Type name -> the type and all its supertypes."""
+    domain_text: str | None = None
+    """The PDDL domain text, when the task was loaded from PDDL."""
+    problem_text: str | None = None
+    """The PDDL problem text (with the current initial state), when loaded from PDDL."""
 
     @property
     def name(self) -> str:
@@ -207,13 +212,21 @@ class PlanningTask:
         for atom in new_facts:
             fluent = problem.fluent(atom[0])
             problem.set_initial_value(fluent(*(problem.object(arg) for arg in atom[1:])), True)
-        return dataclasses.replace(self, problem=problem, initial_facts=new_facts)
+        problem_text = None
+        if self.problem_text is not None:
+            # Rewriting the (:init ...) of the original text keeps every name as it
+            # was; UP's PDDLWriter would take seconds on large problems.
+            source = SourceText(self.problem_text, str(self.problem_path or "<problem>"), "problem")
+            problem_text = replace_init(source, sorted(new_facts))
+        return dataclasses.replace(
+            self, problem=problem, initial_facts=new_facts, problem_text=problem_text
+        )
 
     # -- plans -----------------------------------------------------------------
     def up_plan(self, steps: Iterable[_StepLike]) -> Any:
         """A unified-planning ``SequentialPlan`` for ``steps`` (e.g. for validation)."""
         ensure_unified_planning()
-        from unified_planning.plans import (  # type: ignore[import-untyped]  # noqa: PLC0415
+        from unified_planning.plans import (  # type: ignore[import-untyped]
             ActionInstance,
             SequentialPlan,
         )
@@ -247,8 +260,11 @@ def load_task(
     problem_source = read_source(problem, "problem", max_bytes=max_bytes)
     check_source(problem_source, max_depth=max_depth)
     up_problem, notes = _parse(domain_source, problem_source)
-    return task_from_problem(
+    task = task_from_problem(
         up_problem, domain_path=Path(domain), problem_path=Path(problem), warnings=notes
+    )
+    return dataclasses.replace(
+        task, domain_text=domain_source.text, problem_text=problem_source.text
     )
 
 
@@ -266,7 +282,10 @@ def load_task_from_text(
     problem_source = decode_source(problem_text.encode("utf-8"), problem_name, "problem")
     check_source(problem_source, max_depth=max_depth)
     up_problem, notes = _parse(domain_source, problem_source)
-    return task_from_problem(up_problem, warnings=notes)
+    task = task_from_problem(up_problem, warnings=notes)
+    return dataclasses.replace(
+        task, domain_text=domain_source.text, problem_text=problem_source.text
+    )
 
 
 def task_from_problem(
@@ -278,12 +297,10 @@ def task_from_problem(
 ) -> PlanningTask:
     """Wrap a unified-planning ``Problem`` (e.g. built in code) as a task."""
     ensure_unified_planning()
-    from unified_planning.model import Problem  # type: ignore[import-untyped]  # noqa: PLC0415
+    from unified_planning.model import Problem  # type: ignore[import-untyped]
 
     if not isinstance(problem, Problem):
-        raise TypeError(
-            f"expected a unified_planning.model.Problem, got {type(problem).__name__}"
-        )
+        raise TypeError(f"expected a unified_planning.model.Problem, got {type(problem).__name__}")
     ancestors: dict[str, frozenset[str]] = {}
     for user_type in problem.user_types:
         chain = []
@@ -365,11 +382,11 @@ _PYPARSING_SUFFIX = re.compile(r"\s*\(at char \d+\),?\s*\(line:\s*\d+,\s*col:\s*
 
 def _parse(domain: SourceText, problem: SourceText) -> tuple[Any, list[str]]:
     ensure_unified_planning()
-    import pyparsing  # noqa: PLC0415
-    from unified_planning.exceptions import (  # type: ignore[import-untyped]  # noqa: PLC0415
+    import pyparsing
+    from unified_planning.exceptions import (  # type: ignore[import-untyped]
         UPUnsupportedProblemTypeError,
     )
-    from unified_planning.io import PDDLReader  # type: ignore[import-untyped]  # noqa: PLC0415
+    from unified_planning.io import PDDLReader  # type: ignore[import-untyped]
 
     notes: list[str] = []
     _check_domain_reference(domain, problem, notes)
@@ -432,9 +449,7 @@ def _located(source: SourceText, message: str, *, feature: str | None = None) ->
     if match is not None:
         offset = source.offset_of(int(match.group(1)), int(match.group(2)))
         first = _LOCATION_IN_MESSAGE.split(first)[0].rstrip(" .,:;-")
-        first = re.sub(r"(?:from|found at|error in expression from)\s*$", "", first).rstrip(
-            " .,:;"
-        )
+        first = re.sub(r"(?:from|found at|error in expression from)\s*$", "", first).rstrip(" .,:;")
     if feature is not None:
         return source.error(
             f"unsupported PDDL feature: {first}",
@@ -459,4 +474,3 @@ def _guess_failing_source(reader: Any, domain: SourceText, problem: SourceText) 
 
 def _first_line(text: str) -> str:
     return text.strip().splitlines()[0] if text.strip() else ""
-

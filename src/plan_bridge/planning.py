@@ -139,7 +139,7 @@ def installed_planners() -> list[str]:
 
 def _oneshot_planners() -> list[str]:
     ensure_unified_planning()
-    from unified_planning.shortcuts import get_environment  # type: ignore[import-untyped]  # noqa: PLC0415
+    from unified_planning.shortcuts import get_environment  # type: ignore[import-untyped]
 
     factory = get_environment().factory
     names = []
@@ -147,7 +147,7 @@ def _oneshot_planners() -> list[str]:
         try:
             if factory.engine(name).is_oneshot_planner():
                 names.append(name)
-        except Exception:  # noqa: S112 - a broken plug-in is simply not offered
+        except Exception:
             continue
     return names
 
@@ -199,7 +199,7 @@ class UPPlanner:
     def supporting_engines(self, task: PlanningTask) -> list[str]:
         """Installed planners whose declared capabilities cover ``task``."""
         ensure_unified_planning()
-        from unified_planning.shortcuts import get_environment  # noqa: PLC0415
+        from unified_planning.shortcuts import get_environment
 
         factory = get_environment().factory
         kind = task.problem.kind
@@ -225,7 +225,7 @@ class UPPlanner:
     def unsupported_features(self, task: PlanningTask) -> list[str]:
         """Features of ``task`` this engine does not declare support for."""
         ensure_unified_planning()
-        from unified_planning.shortcuts import get_environment  # noqa: PLC0415
+        from unified_planning.shortcuts import get_environment
 
         engine = get_environment().factory.engine(self._engine)
         kind = task.problem.kind
@@ -257,7 +257,7 @@ class UPPlanner:
         if initial_state is not None:
             task = task.with_initial_state(initial_state)
         ensure_unified_planning()
-        from unified_planning.io import PDDLWriter  # type: ignore[import-untyped]  # noqa: PLC0415
+        from unified_planning.io import PDDLWriter  # type: ignore[import-untyped]
 
         notes: list[str] = []
         missing = self.unsupported_features(task)
@@ -266,12 +266,18 @@ class UPPlanner:
                 f"{self._engine} does not declare support for: {', '.join(missing)}; trying anyway"
             )
         try:
-            with warnings.catch_warnings(record=True) as caught:
-                warnings.simplefilter("always")
-                writer = PDDLWriter(task.problem)
-                domain_text = writer.get_domain()
-                problem_text = writer.get_problem()
-            notes.extend(str(w.message) for w in caught)
+            if task.domain_text is not None and task.problem_text is not None:
+                # Loaded from PDDL: the worker re-reads the very text we read, so names
+                # come back unchanged.
+                writer: Any = None
+                domain_text, problem_text = task.domain_text, task.problem_text
+            else:
+                with warnings.catch_warnings(record=True) as caught:
+                    warnings.simplefilter("always")
+                    writer = PDDLWriter(task.problem)
+                    domain_text = writer.get_domain()
+                    problem_text = writer.get_problem()
+                notes.extend(str(w.message) for w in caught)
         except Exception as exc:
             return self._finish(
                 task,
@@ -299,17 +305,28 @@ class UPPlanner:
         notes: list[str],
         missing: list[str],
     ) -> PlanResult:
-        common = {"engine_status": reply.status, "engine_time_s": reply.engine_time_s}
         if reply.outcome == "result" and reply.status.startswith("SOLVED"):
-            steps = [
-                PlanStep(
-                    writer.get_item_named(action).name,
-                    tuple(writer.get_item_named(arg).name for arg in args),
-                )
-                for action, args in reply.plan
-            ]
+            if writer is None:
+                steps = [PlanStep(action, args) for action, args in reply.plan]
+            else:
+                # PDDLWriter renames what is not a valid PDDL name: map back.
+                steps = [
+                    PlanStep(
+                        writer.get_item_named(action).name,
+                        tuple(writer.get_item_named(arg).name for arg in args),
+                    )
+                    for action, args in reply.plan
+                ]
             return self._finish(
-                task, started, PlanStatus.SOLVED, "", notes, steps=steps, log=reply.log, **common
+                task,
+                started,
+                PlanStatus.SOLVED,
+                "",
+                notes,
+                steps=steps,
+                log=reply.log,
+                engine_status=reply.status,
+                engine_time_s=reply.engine_time_s,
             )
         if reply.outcome == "result" and reply.status.startswith("UNSOLVABLE"):
             report = relaxed_unreachable_goals(task, timeout=self.explain_timeout)
@@ -332,13 +349,21 @@ class UPPlanner:
             return self._no_plan(task, started, status, verdict, report, notes, missing, reply)
         if reply.outcome == "crashed":
             return self._finish(
-                task, started, PlanStatus.ERROR, f"{self._engine}: {reply.message}", notes, **common
+                task,
+                started,
+                PlanStatus.ERROR,
+                f"{self._engine}: {reply.message}",
+                notes,
+                engine_status=reply.status,
+                engine_time_s=reply.engine_time_s,
             )
         # The engine raised, or returned MEMOUT / INTERNAL_ERROR / UNSUPPORTED_PROBLEM.
         detail = reply.message or reply.log.strip().splitlines()[-1:] or [reply.status]
         message = detail if isinstance(detail, str) else detail[0]
-        if missing or reply.error_type == "UPUnsupportedProblemTypeError" or (
-            reply.status == "UNSUPPORTED_PROBLEM"
+        if (
+            missing
+            or reply.error_type == "UPUnsupportedProblemTypeError"
+            or (reply.status == "UNSUPPORTED_PROBLEM")
         ):
             explanation = (
                 f"{self._engine} cannot handle this problem"
@@ -346,7 +371,14 @@ class UPPlanner:
                 + f" ({_first_line(message)}). {self._alternatives(task)}"
             )
             return self._finish(
-                task, started, PlanStatus.UNSUPPORTED, explanation, notes, log=reply.log, **common
+                task,
+                started,
+                PlanStatus.UNSUPPORTED,
+                explanation,
+                notes,
+                log=reply.log,
+                engine_status=reply.status,
+                engine_time_s=reply.engine_time_s,
             )
         kind = f"{reply.error_type}: " if reply.error_type else ""
         return self._finish(
@@ -356,7 +388,8 @@ class UPPlanner:
             f"{self._engine} failed: {kind}{_first_line(message)}",
             notes,
             log=reply.log,
-            **common,
+            engine_status=reply.status,
+            engine_time_s=reply.engine_time_s,
         )
 
     def _no_plan(

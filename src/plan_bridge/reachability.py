@@ -64,7 +64,7 @@ class ReachabilityReport:
         return "; ".join(lines)
 
 
-class _Deadline(Exception):
+class _DeadlineError(Exception):
     pass
 
 
@@ -84,7 +84,7 @@ def relaxed_unreachable_goals(
         reached[fact[0]].add(fact[1:])
     try:
         _fixpoint(task, schemas, reached, deadline)
-    except _Deadline:
+    except _DeadlineError:
         return ReachabilityReport(complete=False)
     unreachable = tuple(
         goal
@@ -118,15 +118,15 @@ def _schema_of(action: Any) -> _Schema:
         if not target.type.is_bool_type() or effect.value.is_false():
             continue
         forall = {variable.name: _type_name(variable.type) for variable in effect.forall}
-        args = []
+        patterns: list[_Arg] = []
         for arg, declared in zip(target.args, target.fluent().signature, strict=True):
             pattern = _arg_pattern(arg)
             if pattern[0] == "*" and arg.is_variable_exp():
                 pattern = ("*", forall.get(arg.variable().name, _type_name(declared.type)))
             elif pattern[0] == "*":
                 pattern = ("*", _type_name(declared.type))
-            args.append(pattern)
-        adds.append((target.fluent().name, tuple(args)))
+            patterns.append(pattern)
+        adds.append((target.fluent().name, tuple(patterns)))
     # Most selective preconditions first keeps the joins small.
     preconditions.sort(key=lambda atom: -sum(kind == "=" for kind, _ in atom[1]))
     return _Schema(action.name, parameters, tuple(preconditions), tuple(adds))
@@ -178,7 +178,7 @@ def _bindings(
     partial: list[dict[str, str]] = [{}]
     for predicate, args in schema.preconditions:
         if deadline is not None and time.monotonic() > deadline:
-            raise _Deadline
+            raise _DeadlineError
         facts = reached.get(predicate)
         if not facts:
             return []
@@ -239,7 +239,7 @@ def _instantiate(
             choices.append(task.objects_of_type(type_name) if type_name else tuple(task.objects))
     results: list[tuple[str, ...]] = [()]
     for options in choices:
-        results = [prefix + (option,) for prefix in results for option in options]
+        results = [(*prefix, option) for prefix in results for option in options]
     return results
 
 

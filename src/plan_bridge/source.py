@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import bisect
 import re
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -25,7 +25,10 @@ __all__ = [
     "DEFAULT_MAX_DEPTH",
     "UP_REQUIREMENTS",
     "SourceText",
+    "check_source",
+    "decode_source",
     "read_source",
+    "replace_init",
 ]
 
 DEFAULT_MAX_BYTES = 5_000_000
@@ -33,12 +36,32 @@ DEFAULT_MAX_DEPTH = 200
 
 #: Requirement flags accepted by the unified-planning 1.3 PDDL grammar.
 UP_REQUIREMENTS = frozenset(
-    """:strips :typing :negative-preconditions :disjunctive-preconditions :equality
-    :existential-preconditions :universal-preconditions :quantified-preconditions
-    :conditional-effects :fluents :numeric-fluents :adl :durative-actions
-    :duration-inequalities :timed-initial-literals :timed-initial-effects :action-costs
-    :hierarchy :method-preconditions :constraints :contingent :preferences :time
-    :continuous-effects""".split()
+    [
+        ":strips",
+        ":typing",
+        ":negative-preconditions",
+        ":disjunctive-preconditions",
+        ":equality",
+        ":existential-preconditions",
+        ":universal-preconditions",
+        ":quantified-preconditions",
+        ":conditional-effects",
+        ":fluents",
+        ":numeric-fluents",
+        ":adl",
+        ":durative-actions",
+        ":duration-inequalities",
+        ":timed-initial-literals",
+        ":timed-initial-effects",
+        ":action-costs",
+        ":hierarchy",
+        ":method-preconditions",
+        ":constraints",
+        ":contingent",
+        ":preferences",
+        ":time",
+        ":continuous-effects",
+    ]
 )
 
 #: Real PDDL requirements that unified-planning 1.3 cannot read.
@@ -167,9 +190,7 @@ class SourceText:
         return None
 
 
-def read_source(
-    path: str | Path, kind: str, *, max_bytes: int = DEFAULT_MAX_BYTES
-) -> SourceText:
+def read_source(path: str | Path, kind: str, *, max_bytes: int = DEFAULT_MAX_BYTES) -> SourceText:
     """Read a PDDL file, refusing what cannot be PDDL text.
 
     Raises :class:`PddlError` for a missing/unreadable file, a file larger than
@@ -186,9 +207,7 @@ def read_source(
     except OSError as exc:
         raise PddlError(f"cannot access {kind} file: {exc.strerror}", path=shown) from exc
     if file.is_dir():
-        raise PddlError(
-            f"is a directory, expected a PDDL {kind} file", path=shown
-        )
+        raise PddlError(f"is a directory, expected a PDDL {kind} file", path=shown)
     if size > max_bytes:
         raise PddlError(
             f"{kind} file is {size / 1e6:.1f} MB, larger than the {max_bytes / 1e6:.1f} MB limit",
@@ -407,3 +426,42 @@ def _common_supertype(source: SourceText, members: list[str]) -> str | None:
         others = set(ancestors(member))
         candidates = [c for c in candidates if c in others]
     return candidates[0] if candidates else None
+
+
+def replace_init(problem: SourceText, facts: Iterable[Sequence[str]]) -> str:
+    """The problem text with its ``(:init ...)`` boolean facts replaced by ``facts``.
+
+    Numeric assignments (``(= (total-cost) 0)``) and timed initial literals are
+    kept: replanning changes what is true, not the costs of actions.
+    """
+    for head, start, end in problem.sections():
+        if head != ":init":
+            continue
+        kept: list[str] = []
+        keep = False
+        depth = 0
+        form_start = 0
+        tokens = [t for t in problem.tokens if start < t.offset < end - 1]
+        for index, token in enumerate(tokens):
+            if token.text == "(":
+                if depth == 0:
+                    form_start = token.offset
+                    nxt = tokens[index + 1].text if index + 1 < len(tokens) else ""
+                    after = tokens[index + 2].text if index + 2 < len(tokens) else ""
+                    keep = nxt == "=" or (nxt == "at" and _is_number(after))
+                depth += 1
+            elif token.text == ")":
+                depth -= 1
+                if depth == 0 and keep:
+                    kept.append(problem.text[form_start : token.offset + 1])
+        body = " ".join(["(" + " ".join(fact) + ")" for fact in facts] + kept)
+        return problem.text[:start] + f"(:init {body})" + problem.text[end:]
+    raise problem.error("the problem has no (:init ...) section", None)
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True

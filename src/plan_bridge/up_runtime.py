@@ -34,7 +34,7 @@ class _LazyConfigurationSpace:
     def __new__(cls, *args: Any, **kwargs: Any) -> Any:
         if isinstance(sys.modules.get("ConfigSpace"), _ConfigSpaceStandIn):
             del sys.modules["ConfigSpace"]
-        import ConfigSpace  # noqa: PLC0415
+        import ConfigSpace
 
         return ConfigSpace.ConfigurationSpace(*args, **kwargs)
 
@@ -58,7 +58,7 @@ def ensure_unified_planning() -> None:
             sys.modules["ConfigSpace"] = stand_in
             installed_stand_in = True
         try:
-            import unified_planning.shortcuts  # noqa: PLC0415
+            import unified_planning.shortcuts  # type: ignore[import-untyped]
 
             environment = unified_planning.shortcuts.get_environment()
             environment.credits_stream = None

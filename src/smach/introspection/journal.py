@@ -9,6 +9,7 @@ pickled, ``repr`` truncated, containers cut to a few items.
 from __future__ import annotations
 
 import json
+import math
 import os
 import threading
 from collections.abc import Mapping
@@ -30,8 +31,8 @@ MAX_DEPTH = 3
 def summarise(value: Any, depth: int = 0) -> Any:
     """A JSON-safe, size-bounded picture of ``value`` (never its pickle)."""
     if value is None or isinstance(value, bool | int | float):
-        if isinstance(value, float) and value != value:  # NaN is not JSON
-            return "nan"
+        if isinstance(value, float) and not math.isfinite(value):  # JSON has no NaN/inf
+            return repr(value)
         return value
     if isinstance(value, str):
         return value if len(value) <= MAX_REPR else value[:MAX_REPR] + "…"
