@@ -9,7 +9,11 @@ Usage::
 Every scenario is timed in repeated trials; each trial runs the scenario enough times
 to last at least ``min_trial_s`` (gc disabled inside the timed region, as ``timeit``
 does), and the table reports the median, the minimum and the 90th percentile of the
-per-unit cost over the trials. Preemption latency is one sample per trial.
+per-unit cost over the trials. The trials of the throughput scenarios are interleaved
+round-robin, and the ``calls`` column gives, per round, the scenario's sample divided by
+the bare-function-call sample of the same round (median over rounds): on a shared
+machine whose speed drifts, that ratio is the stable number. Preemption latency is one
+sample per trial.
 
 Scenarios (names as printed in the table):
 

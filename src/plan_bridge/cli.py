@@ -49,13 +49,12 @@ def register(command: Command) -> Command:
     return command
 
 
-class _Parser(argparse.ArgumentParser):
-    # argparse exits with 2 on usage errors already; keep that, it is "bad input".
-    pass
-
-
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(
+    # The run/check commands live in their own module, which registers them on import.
+    from plan_bridge import mission_commands  # noqa: F401
+
+    # argparse exits with 2 on usage errors, which is our "bad input" code.
+    parser = argparse.ArgumentParser(
         prog="plan-bridge",
         description="Plan PDDL goals with unified-planning engines and run the plans as "
         "SMACH state machines.",

@@ -166,10 +166,7 @@ class Executive(smach.Container):
         if self._compiled is None:
             return []
         edges: list[tuple[str, str, str | None]] = [(o, "PLAN", o) for o in OUTCOMES]
-        return edges + [
-            ("aborted", "PLAN", "PLAN"),
-            ("invalid", "PLAN", "PLAN"),
-        ]
+        return [*edges, ("aborted", "PLAN", "PLAN"), ("invalid", "PLAN", "PLAN")]
 
     def set_initial_state(
         self, initial_states: Sequence[str], userdata: smach.UserData | None = None

@@ -116,6 +116,22 @@ class _Compiler:
             return quantified
         raise self._numeric(node)
 
+    def render(self, node: Any) -> Callable[[Binding], str]:
+        """PDDL text of a condition with the parameters bound: ``(item-at cup hall)``."""
+        if node.is_fluent_exp() and node.type.is_bool_type():
+            atom = self.atom(node)
+            return lambda b: format_fact(atom(b))
+        ops = {"is_and": "and", "is_or": "or", "is_not": "not", "is_implies": "imply"}
+        for test, word in ops.items():
+            if getattr(node, test)():
+                parts = [self.render(a) for a in node.args]
+                return lambda b: f"({word} {' '.join(p(b) for p in parts)})"
+        if node.is_equals() and node.arg(0).type.is_user_type():
+            lt, rt = self.term(node.arg(0)), self.term(node.arg(1))
+            return lambda b: f"(= {lt(b)} {rt(b)})"
+        text = str(node)
+        return lambda b: text
+
     @staticmethod
     def _numeric(node: Any) -> UnsupportedFeatureError:
         return UnsupportedFeatureError(
@@ -137,7 +153,7 @@ class _Effect:
 class _LiftedAction:
     name: str
     parameters: tuple[str, ...]
-    precondition_parts: tuple[tuple[str, Condition], ...]
+    precondition_parts: tuple[tuple[Callable[[Binding], str], Condition], ...]
     effects: tuple[_Effect, ...]
     strips_preconditions: tuple[Callable[[Binding], Fact], ...] | None
 
@@ -170,11 +186,7 @@ class GroundAction:
     def unmet_preconditions(self, facts: Facts) -> list[str]:
         """The precondition parts that do not hold, as text with the arguments bound."""
         b = self._binding
-        out = []
-        for text, cond in self._lifted.precondition_parts:
-            if not cond(b, facts):
-                out.append(_bind_text(text, b))
-        return out
+        return [text(b) for text, cond in self._lifted.precondition_parts if not cond(b, facts)]
 
     def effects(self, facts: Facts) -> tuple[set[Fact], set[Fact]]:
         """(added, deleted) facts when applied in ``facts`` (conditions read ``facts``)."""
@@ -211,12 +223,6 @@ class GroundAction:
         """Atoms a skill should report on: STRIPS preconditions and effects."""
         adds, dels = self.effects(facts)
         return set(self.precondition_atoms() or ()) | adds | dels
-
-
-def _bind_text(text: str, binding: Binding) -> str:
-    for name, value in sorted(binding.items(), key=lambda kv: -len(kv[0])):
-        text = text.replace(name, value)
-    return text
 
 
 @dataclass(frozen=True)
@@ -258,12 +264,12 @@ class ActionModel:
                 f"unknown action {name!r}; actions: {', '.join(sorted(self.task.actions))}"
             ) from exc
         c = self._compiler
-        parts: list[tuple[str, Condition]] = []
+        parts: list[tuple[Callable[[Binding], str], Condition]] = []
         strips: list[Callable[[Binding], Fact]] | None = []
         for pre in action.preconditions:
             conjuncts = pre.args if pre.is_and() else [pre]
             for conjunct in conjuncts:
-                parts.append((str(conjunct), c.condition(conjunct)))
+                parts.append((c.render(conjunct), c.condition(conjunct)))
                 if strips is not None:
                     if conjunct.is_fluent_exp() and conjunct.type.is_bool_type():
                         strips.append(c.atom(conjunct))
@@ -319,7 +325,9 @@ class ActionModel:
             goals = []
             for goal in self.task.problem.goals:
                 for conjunct in goal.args if goal.is_and() else [goal]:
-                    goals.append((str(conjunct), self._compiler.condition(conjunct)))
+                    goals.append(
+                        (self._compiler.render(conjunct)({}), self._compiler.condition(conjunct))
+                    )
             self._goals = goals
         return [text for text, cond in goals if not cond({}, facts)]
 

@@ -366,6 +366,12 @@ class Concurrence(Container):
             )
         return self._default_outcome
 
+    def __getstate__(self) -> dict[str, Any]:
+        state = super().__getstate__()
+        state["_children"] = None
+        state["_run"] = None
+        return state
+
     def request_preempt(self) -> None:
         super().request_preempt()
         run = self._run

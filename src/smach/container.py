@@ -30,8 +30,10 @@ from typing import Any, ClassVar, Concatenate, Generic, ParamSpec, TypeVar
 
 from smach.exceptions import (
     InvalidConstructionError,
+    InvalidOutcomeError,
     InvalidStateError,
     InvalidUserCodeError,
+    NoContainerOpenError,
     SmachError,
 )
 from smach.introspection.events import (
@@ -48,7 +50,7 @@ from smach.introspection.events import (
 )
 from smach.log import info_enabled
 from smach.state import State
-from smach.user_data import Remapper, UserData
+from smach.user_data import Remapper, UserData, make_remapper
 
 __all__ = ["Container", "construction_method"]
 
@@ -120,6 +122,7 @@ class Container(State):
         self._termination_cbs: list[tuple[Callable[..., Any], tuple[Any, ...]]] = []
         # Listeners of this container's own events only (callbacks, log lines).
         self._local: tuple[Listener, ...] = ()
+        self._log_info = False
 
     # -- userdata --------------------------------------------------------------------
     @property
@@ -148,7 +151,7 @@ class Container(State):
         super()._interface_changed()
 
     def _remapper(self, label: str, state: State, remapping: Mapping[str, str] | None) -> Remapper:
-        return Remapper(
+        return make_remapper(
             self._userdata,
             state.get_registered_input_keys(),
             state.get_registered_output_keys(),
@@ -231,7 +234,7 @@ class Container(State):
     def _currently_opened_container(cls: type[C]) -> C:
         stack = _construction.stack
         if not stack:
-            raise InvalidConstructionError(
+            raise NoContainerOpenError(
                 f"{cls.__name__} construction call with no container open; "
                 f"use 'with container:' or call the method on an instance"
             )
@@ -318,14 +321,17 @@ class Container(State):
         cbs: list[tuple[Callable[..., Any], tuple[Any, ...]]],
         args: tuple[Any, ...],
     ) -> None:
+        # Callbacks observe; a failing observer (say, an introspection publisher) must
+        # not abort the robot's task. The error is logged with where it came from, and
+        # the remaining callbacks still run.
         for cb, extra in cbs:
             try:
                 cb(*args, *extra)
             except Exception as exc:
-                raise InvalidUserCodeError(
+                sys.modules["smach"].logerr(
                     f"{self._path}: {kind} callback {getattr(cb, '__qualname__', cb)!r} raised "
                     f"{type(exc).__name__}: {exc}"
-                ) from exc
+                )
 
     def _callbacks_listener(self, event: Event) -> None:
         if isinstance(event, ContainerStarted):
@@ -335,7 +341,10 @@ class Container(State):
         elif isinstance(event, ContainerTerminated):
             self.call_termination_cbs(event.terminal_states, event.outcome)
 
-    def _refresh_local(self, log: bool = False) -> None:
+    def _refresh_local(self, log: bool | None = None) -> None:
+        if log is None:
+            log = self._log_info
+        self._log_info = log
         local: list[Listener] = []
         if self._start_cbs or self._transition_cbs or self._termination_cbs:
             local.append(self._callbacks_listener)
@@ -437,13 +446,23 @@ class Container(State):
 
     # -- running helpers for container implementations ------------------------------------
     def _begin(self, parent_ud: UserData | None) -> None:
-        """Start a run: copy input keys in, decide who listens this run."""
-        self._copy_input_keys(parent_ud)
-        self._refresh_local(log=info_enabled())
+        """Start a run: copy input keys in, decide who listens this run.
+
+        Whether INFO lines are wanted is decided once per top-level run (it costs a
+        logging lookup) and shared through the bus with the containers below.
+        """
+        if parent_ud is not None and self._input_keys:
+            self._copy_input_keys(parent_ud)
+        bus = self._bus
+        if self._parent is None:
+            bus.log_info = info_enabled()
+        if bus.log_info is not self._log_info:
+            self._refresh_local(log=bus.log_info)
 
     def _end(self, parent_ud: UserData | None) -> None:
         """Finish a run normally: copy output keys out."""
-        self._copy_output_keys(parent_ud)
+        if parent_ud is not None and self._output_keys:
+            self._copy_output_keys(parent_ud)
 
     def _after_run(self) -> None:
         """Always called when a run ends, normally or not.
@@ -472,7 +491,7 @@ class Container(State):
 
     def _bad_outcome(self, label: str, state: State, outcome: object) -> InvalidUserCodeError:
         declared = ", ".join(state.get_registered_outcomes()) or "none"
-        return InvalidUserCodeError(
+        return InvalidOutcomeError(
             f"state {self._path}/{label} ({type(state).__name__}) returned {outcome!r}; "
             f"declared outcomes: {declared}"
         )
@@ -517,6 +536,9 @@ class Container(State):
 
 def _raw_get(ud: UserData, key: str) -> Any:
     """Read a key without the read-only wrapper (for copying between scopes)."""
-    if isinstance(ud, Remapper):
-        return ud._ud._data[ud._remap.get(key, key)]
+    while isinstance(ud, Remapper):
+        if key not in ud._in:
+            ud._read(key)  # raises the undeclared-key error
+        key = ud._remap.get(key, key)
+        ud = ud._ud
     return ud._data[key]

@@ -11,9 +11,11 @@ from collections.abc import Iterable
 
 __all__ = [
     "InvalidConstructionError",
+    "InvalidOutcomeError",
     "InvalidStateError",
     "InvalidTransitionError",
     "InvalidUserCodeError",
+    "NoContainerOpenError",
     "SmachError",
     "UndeclaredKeyError",
     "UserDataKeyError",
@@ -45,6 +47,22 @@ class InvalidUserCodeError(SmachError):
 
 class InvalidConstructionError(SmachError):
     """A construction call was made with no container open."""
+
+
+class InvalidOutcomeError(InvalidUserCodeError, InvalidTransitionError):
+    """A state returned something that is not one of its registered outcomes.
+
+    Both an :class:`InvalidUserCodeError` and, as in the original SMACH, an
+    :class:`InvalidTransitionError`.
+    """
+
+
+class NoContainerOpenError(InvalidConstructionError, InvalidStateError):
+    """A class-level construction call was made with no container open.
+
+    Both an :class:`InvalidConstructionError` and, as in the original SMACH, an
+    :class:`InvalidStateError`.
+    """
 
 
 class UserDataKeyError(SmachError, KeyError, AttributeError):

@@ -159,7 +159,10 @@ class Iterator(Container):
             data = self._userdata._data
             it_label = self._items_label
             self._index = 0
-            while not smach.is_shutdown():
+            preempted = False
+            while True:
+                if smach.is_shutdown():
+                    return None
                 try:
                     item = next(iterator)
                 except StopIteration:
@@ -185,8 +188,11 @@ class Iterator(Container):
                 if observed:
                     self._emit_exited(label, outcome)
                 self._index += 1
-                if self._preempt_requested:
+                if self._preempt_requested and not state._preempt_requested:
+                    # The child serviced our request: stop here. (If it ignored the
+                    # request, it flows on to the next item, as between states.)
                     self._clear_preempt()
+                    preempted = True
                     break
                 if outcome in breaks or (loops and outcome not in loops):
                     break
@@ -194,6 +200,9 @@ class Iterator(Container):
                     self._emit_transition(label, outcome, label)
             assert outcome is not None
             final = self._final_outcome_map.get(outcome, outcome)
+            if preempted and final not in self._outcomes:
+                # Stopped on a loop outcome: report the preemption if we can.
+                final = "preempted" if "preempted" in self._outcomes else self._exhausted_outcome
             if final not in self._outcomes:
                 raise InvalidUserCodeError(
                     f"{self._path}: the loop ended with {outcome!r}, which maps to no outcome of "

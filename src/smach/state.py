@@ -153,6 +153,17 @@ class State:
             return True
         return self.preempt_event.wait(max(0.0, seconds))
 
+    # -- copying -----------------------------------------------------------------------
+    def __getstate__(self) -> dict[str, Any]:
+        # Events and locks belong to a running process, not to a copy.
+        state = dict(self.__dict__)
+        state.pop("_preempt_event", None)
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._preempt_event = None
+
     # -- tree membership ------------------------------------------------------------
     def _adopt(self, bus: EventBus, path: str) -> None:
         """Attach this state to a tree: its events go to ``bus`` under ``path``."""

@@ -12,27 +12,23 @@ current slot, so at least one of them forwards the request to the running child.
 
 from __future__ import annotations
 
-import sys
 import threading
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
+import smach
 from smach.container import Container, construction_method
-from smach.exceptions import InvalidStateError, InvalidTransitionError, InvalidUserCodeError
+from smach.exceptions import (
+    InvalidOutcomeError,
+    InvalidStateError,
+    InvalidTransitionError,
+    InvalidUserCodeError,
+)
 from smach.state import State
 from smach.user_data import Remapper, UserData
 from smach.util import key_list
 
 __all__ = ["StateMachine"]
-
-_smach: Any = None
-
-
-def _smach_module() -> Any:
-    global _smach
-    if _smach is None:
-        _smach = sys.modules["smach"]
-    return _smach
 
 
 class _Slot:
@@ -129,9 +125,10 @@ class StateMachine(Container):
             raise InvalidStateError(
                 f"{self._path}: a state labelled {label!r} was already added; labels must be unique"
             )
-        self._adopt_child(label, state)
         given = dict(transitions or {})
-        self.check_state_spec(label, state, given)
+        if isinstance(state, State):
+            self.check_state_spec(label, state, given)
+        self._adopt_child(label, state)
         table: dict[str, str | None] = {o: None for o in state.get_registered_outcomes()}
         table.update(given)
         previous = self._last_added_label
@@ -261,7 +258,6 @@ class StateMachine(Container):
         if self._is_running:
             raise InvalidStateError(f"{self._path} is already running (in another thread?)")
         self._is_running = True
-        smach = _smach_module()
         label = ""
         try:
             self._begin(parent_ud)
@@ -298,6 +294,8 @@ class StateMachine(Container):
                     self._emit_exited(label, outcome)
                 if isinstance(target, _Slot):
                     if observed:
+                        # Callbacks read get_active_states(): show the new state.
+                        self._current_slot = target
                         self._emit_transition(label, outcome, target.label)
                     if smach.is_shutdown():
                         return None
@@ -318,11 +316,12 @@ class StateMachine(Container):
         finally:
             self._current_slot = None
             self._is_running = False
-            self._after_run()
+            if self._bus.preempt_seen:
+                self._after_run()
 
     def _missing_transition(self, slot: _Slot, outcome: object) -> InvalidUserCodeError:
         if outcome in slot.state.get_registered_outcomes():
-            return InvalidUserCodeError(
+            return InvalidOutcomeError(
                 f"state {self._path}/{slot.label} returned {outcome!r}, which was registered "
                 f"after the state was added and has no transition"
             )
@@ -358,6 +357,19 @@ class StateMachine(Container):
             self._clear_preempt()
             self._preempted_state = None
 
+    def __getstate__(self) -> dict[str, Any]:
+        state = super().__getstate__()
+        for name in ("_preempt_lock", "_slots", "_current_slot", "_preempted_state"):
+            state.pop(name, None)
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        super().__setstate__(state)
+        self._preempt_lock = threading.Lock()
+        self._slots = None
+        self._current_slot = None
+        self._preempted_state = None
+
     # -- introspection -----------------------------------------------------------------------------
     def get_children(self) -> dict[str, State]:
         return self._states
@@ -382,7 +394,6 @@ class StateMachine(Container):
     def _log_event(self, event: Any) -> None:
         from smach.introspection.events import ContainerStarted, ContainerTerminated, Transition
 
-        smach = _smach_module()
         if isinstance(event, ContainerStarted):
             smach.loginfo(
                 f"State machine starting in initial state '{event.initial_states[0]}' with "

@@ -20,7 +20,7 @@ from smach.introspection.events import UserdataWritten, stamp
 if TYPE_CHECKING:
     from smach.state import State
 
-__all__ = ["Const", "Remapper", "UserData", "get_const"]
+__all__ = ["Const", "Remapper", "UserData", "get_const", "make_remapper"]
 
 _MISSING = object()
 
@@ -80,12 +80,6 @@ class UserData:
     def keys(self) -> list[str]:
         return list(self._data)
 
-    def items(self) -> list[tuple[str, Any]]:
-        return list(self._data.items())
-
-    def get(self, key: str, default: Any = None) -> Any:
-        return self._data.get(key, default)
-
     def update(self, other: UserData | Mapping[str, Any]) -> None:
         """Merge another userdata (or a mapping) into this one, overwriting."""
         if isinstance(other, UserData):
@@ -94,10 +88,6 @@ class UserData:
         else:
             for key, value in other.items():
                 self[key] = value
-
-    def to_dict(self) -> dict[str, Any]:
-        """A shallow copy of the contents."""
-        return dict(self._data)
 
     # -- kept from the original, unused by the library -------------------------
     def extract(self, keys: Iterable[str], remapping: Mapping[str, str]) -> UserData:
@@ -178,9 +168,10 @@ class Remapper(UserData):
     :class:`InvalidUserCodeError` naming the state and its declared keys.
     """
 
-    __slots__ = ("_in", "_out", "_owner", "_remap", "_rw", "_ud", "_writer")
+    __slots__ = ("_d", "_in", "_out", "_owner", "_remap", "_rw", "_ud", "_writer")
 
     _ud: UserData
+    _d: dict[str, Any] | None
     _in: frozenset[str]
     _out: frozenset[str]
     _rw: frozenset[str]
@@ -200,6 +191,9 @@ class Remapper(UserData):
     ) -> None:
         set_ = object.__setattr__
         set_(self, "_ud", ud)
+        # Over a plain UserData, read its dict directly; over another Remapper (a state
+        # wrapping the view it was given), go through that view and its checks.
+        set_(self, "_d", None if isinstance(ud, Remapper) else ud._data)
         set_(self, "_in", frozenset(input_keys))
         set_(self, "_out", frozenset(output_keys))
         set_(self, "_rw", self._in & self._out)
@@ -225,10 +219,14 @@ class Remapper(UserData):
                 f"key; declared input keys: {declared}"
             )
         target = self._remap.get(key, key)
-        value = self._ud._data.get(target, _MISSING)
-        if value is _MISSING:
-            where = f" (remapped to {target!r})" if target != key else ""
-            raise UserDataKeyError(key + where, self._ud._data)
+        data = self._d
+        if data is None:
+            value = self._ud[target]
+        else:
+            value = data.get(target, _MISSING)
+            if value is _MISSING:
+                where = f" (remapped to {target!r})" if target != key else ""
+                raise UserDataKeyError(key + where, data)
         if key in self._rw:
             return value
         return get_const(value)
@@ -241,7 +239,10 @@ class Remapper(UserData):
                 f"key; declared output keys: {declared}"
             )
         target = self._remap.get(key, key)
-        self._ud._data[target] = value
+        if self._d is None:
+            self._ud[target] = value
+        else:
+            self._d[target] = value
         owner = self._owner
         if owner is not None and owner._bus.listeners:
             t, thread = stamp()
@@ -279,7 +280,8 @@ class Remapper(UserData):
     def __contains__(self, key: object) -> bool:
         if key not in self._in:
             return False
-        return self._remap.get(key, key) in self._ud._data
+        target = self._remap.get(key, key)
+        return target in (self._ud if self._d is None else self._d)
 
     def __iter__(self) -> Iterator[str]:
         return iter(self.keys())
@@ -292,24 +294,88 @@ class Remapper(UserData):
 
     def keys(self) -> list[str]:
         """The state-local names of the declared input keys that have a value."""
-        data = self._ud._data
+        data = self._ud if self._d is None else self._d
         return [k for k in sorted(self._in) if self._remap.get(k, k) in data]
-
-    def items(self) -> list[tuple[str, Any]]:
-        return [(k, self._read(k)) for k in self.keys()]
-
-    def get(self, key: str, default: Any = None) -> Any:
-        if key in self:
-            return self._read(key)
-        if key not in self._in:
-            self._read(key)  # raises the undeclared-key error
-        return default
 
     def update(self, other: UserData | Mapping[str, Any]) -> None:
         self._ud.update(other)
 
-    def to_dict(self) -> dict[str, Any]:
-        return dict(self.items())
-
     def __getstate__(self) -> dict[str, Any]:
         raise TypeError("a Remapper is a view of its container's userdata and cannot be pickled")
+
+
+# -- fast remappers ----------------------------------------------------------------------
+# A Remapper resolves ``ud.key`` in __getattr__, which Python only calls after normal
+# attribute lookup has failed (and raised and discarded an AttributeError): about 1 µs
+# per access. Containers instead build remappers from a subclass with one property
+# per declared key, cached per interface (keys and remapping), so a read is a property
+# call and a dict lookup.
+
+_REMAPPER_CLASSES: dict[
+    tuple[frozenset[str], frozenset[str], tuple[tuple[str, str], ...]], type[Remapper]
+] = {}
+
+
+def _fast_setattr(self: Remapper, name: str, value: Any) -> None:
+    try:
+        object.__setattr__(self, name, value)
+    except AttributeError:
+        self._write(name, value)  # raises the undeclared-key error with its message
+
+
+def _key_property(key: str, target: str, readable: bool, writable: bool, const: bool) -> property:
+    def get(self: Remapper) -> Any:
+        # Fast classes only ever wrap a plain UserData, so _d is its dict.
+        data: dict[str, Any] = self._d  # type: ignore[assignment]
+        try:
+            value = data[target]
+        except KeyError:
+            raise UserDataKeyError(key, data) from None
+        return get_const(value) if const else value
+
+    def put(self: Remapper, value: Any) -> None:
+        self._d[target] = value  # type: ignore[index]
+        owner = self._owner
+        if owner is not None and owner._bus.listeners:
+            t, thread = stamp()
+            owner._bus.emit(
+                UserdataWritten(
+                    path=owner._path,
+                    time=t,
+                    thread=thread,
+                    key=target,
+                    value=value,
+                    writer=self._writer,
+                )
+            )
+
+    return property(get if readable else None, put if writable else None)
+
+
+def make_remapper(
+    ud: UserData,
+    input_keys: Iterable[str],
+    output_keys: Iterable[str],
+    remapping: Mapping[str, str] | None = None,
+    *,
+    owner: State | None = None,
+    writer: str = "",
+) -> Remapper:
+    """A :class:`Remapper` with fast attribute access to the declared keys."""
+    ins, outs = frozenset(input_keys), frozenset(output_keys)
+    remap = dict(remapping or {})
+    if isinstance(ud, Remapper):
+        return Remapper(ud, ins, outs, remap, owner=owner, writer=writer)
+    signature = (ins, outs, tuple(sorted(remap.items())))
+    cls = _REMAPPER_CLASSES.get(signature)
+    if cls is None:
+        namespace: dict[str, Any] = {"__slots__": (), "__setattr__": _fast_setattr}
+        for key in ins | outs:
+            if not key.isidentifier() or key.startswith("_") or hasattr(Remapper, key):
+                continue  # reached through __getattr__/__getitem__ as before
+            namespace[key] = _key_property(
+                key, remap.get(key, key), key in ins, key in outs, key in ins and key not in outs
+            )
+        cls = type("Remapper", (Remapper,), namespace)
+        _REMAPPER_CLASSES[signature] = cls
+    return cls(ud, ins, outs, remap, owner=owner, writer=writer)

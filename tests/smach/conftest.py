@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 import pytest
+from smach_helpers import LogRecorder
 
 import smach
 from smach import container as container_module
@@ -24,19 +25,6 @@ def _restore_smach_globals() -> Iterator[None]:
     leftover = list(stack)
     stack.clear()
     assert leftover == [], f"test left containers open: {leftover}"
-
-
-class LogRecorder:
-    """Four recording loggers, installed with smach.set_loggers."""
-
-    def __init__(self) -> None:
-        self.info: list[str] = []
-        self.warn: list[str] = []
-        self.debug: list[str] = []
-        self.error: list[str] = []
-
-    def install(self) -> None:
-        smach.set_loggers(self.info.append, self.warn.append, self.debug.append, self.error.append)
 
 
 @pytest.fixture

@@ -122,3 +122,16 @@ def all_flags(state: smach.State) -> dict[str, bool]:
         for child in state.get_children().values():
             flags.update(all_flags(child))
     return flags
+
+
+class LogRecorder:
+    """Four recording loggers, installed with smach.set_loggers."""
+
+    def __init__(self) -> None:
+        self.info: list[str] = []
+        self.warn: list[str] = []
+        self.debug: list[str] = []
+        self.error: list[str] = []
+
+    def install(self) -> None:
+        smach.set_loggers(self.info.append, self.warn.append, self.debug.append, self.error.append)

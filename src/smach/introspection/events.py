@@ -141,9 +141,11 @@ Listener = Callable[[Event], object]
 class EventBus:
     """The listeners of one tree of states; shared by every state of the tree."""
 
-    __slots__ = ("_lock", "listeners", "preempt_seen")
+    __slots__ = ("_lock", "listeners", "log_info", "preempt_seen")
 
     def __init__(self) -> None:
+        # Whether the current top-level run writes INFO log lines (see Container._begin).
+        self.log_info = False
         # Set when any state of the tree got a preempt request, so that the end of a
         # top-level run only walks the tree to clear flags when there can be some.
         self.preempt_seen = False
@@ -158,7 +160,18 @@ class EventBus:
 
     def remove(self, listener: Listener) -> None:
         with self._lock:
-            self.listeners = [lst for lst in self.listeners if lst is not listener]
+            # == and not `is`: each access to obj.method makes a new bound method.
+            self.listeners = [lst for lst in self.listeners if lst != listener]
+
+    def __getstate__(self) -> dict[str, Any]:
+        # Listeners watch a live run (files, sockets, viewers): a copy starts without.
+        return {"preempt_seen": False}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.listeners = []
+        self._lock = threading.Lock()
+        self.preempt_seen = bool(state.get("preempt_seen", False))
+        self.log_info = False
 
     def emit(self, event: Event) -> None:
         """Deliver ``event`` to every listener.

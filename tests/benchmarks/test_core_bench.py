@@ -1,0 +1,57 @@
+"""Smoke test of benchmarks/core_bench.py: it runs in quick mode and reports every scenario.
+
+No timing assertions: the numbers depend on the machine and its load.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+SCRIPT = ROOT / "benchmarks" / "core_bench.py"
+
+SCENARIOS = (
+    "chain",
+    "remap_loop",
+    "concurrence",
+    "concurrence_busy",
+    "iterator_small",
+    "iterator_medium",
+    "iterator_large",
+    "nested",
+    "preempt_event",
+    "preempt_sleep",
+    "preempt_poll",
+    "call_function",
+    "call_method",
+    "handloop",
+    "peer_py_trees",
+    "peer_transitions",
+)
+
+
+@pytest.mark.timeout(180)
+def test_core_bench_quick_reports_every_scenario(tmp_path: Path) -> None:
+    out = tmp_path / "core_bench.json"
+    proc = subprocess.run(
+        [sys.executable, str(SCRIPT), "--quick", "--json", str(out)],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+    assert proc.returncode == 0, f"stdout:\n{proc.stdout}\nstderr:\n{proc.stderr}"
+    missing = [n for n in SCENARIOS if not re.search(rf"^{n}\s", proc.stdout, re.MULTILINE)]
+    assert not missing, f"scenarios missing from the table: {missing}\n{proc.stdout}"
+    assert "Targets" in proc.stdout
+    assert re.search(r"^\s+(PASS|MISS)\s", proc.stdout, re.MULTILINE)
+    data = json.loads(out.read_text(encoding="utf-8"))
+    assert data["mode"] == "quick"
+    assert set(SCENARIOS) <= set(data["results"])

@@ -1,0 +1,5 @@
+(define (problem locked-out)
+  (:domain rooms)
+  (:objects robot1 - robot hall office - room cup - item)
+  (:init (at robot1 hall) (free robot1) (item-at cup hall) (connected hall office))
+  (:goal (and (item-at cup office))))
