@@ -12,6 +12,7 @@ from __future__ import annotations
 import random
 import threading
 from collections.abc import Iterable
+from dataclasses import dataclass
 
 import smach
 from plan_bridge.domain import Fact, PlanningTask
@@ -19,11 +20,30 @@ from plan_bridge.planning import PlanStep
 from plan_bridge.semantics import ActionModel
 from plan_bridge.skills import SkillRegistry
 
-__all__ = ["SimulatedWorld", "SymbolicSkill", "symbolic_skills"]
+__all__ = ["Fault", "SimulatedWorld", "SymbolicSkill", "symbolic_skills"]
+
+
+@dataclass(frozen=True)
+class Fault:
+    """A fault the simulated world injected: when (simulated seconds), what, where."""
+
+    time: float
+    kind: str
+    action: str
+    detail: str = ""
 
 
 class SimulatedWorld:
-    """The true state of a simulated world, with seeded faults."""
+    """The true state of a simulated world, with seeded faults.
+
+    Domain worlds subclass it: they keep the true PDDL facts in :attr:`_facts`
+    (under :attr:`_lock`), advance :attr:`sim_time` (simulated robot seconds) as the
+    robot acts, and record every fault they inject with :meth:`inject`, so that runs
+    can be compared (``plan-bridge study``).
+    """
+
+    #: Simulated seconds one symbolic action takes.
+    action_duration = 1.0
 
     def __init__(
         self,
@@ -41,8 +61,23 @@ class SimulatedWorld:
         self.fail_rate = fail_rate
         self._facts: set[Fact] = set(task.initial_facts if facts is None else facts)
         self._lock = threading.Lock()
-        self.faults_injected = 0
+        self.faults: list[Fault] = []
+        self.sim_time = 0.0
         self.actions_run = 0
+
+    @property
+    def faults_injected(self) -> int:
+        return len(self.faults)
+
+    def inject(self, kind: str, action: str, detail: str = "") -> Fault:
+        """Record a fault (call it where the world decides one happens)."""
+        fault = Fault(self.sim_time, kind, action, detail)
+        self.faults.append(fault)
+        return fault
+
+    def goal_reached(self) -> bool:
+        """Whether the task's goal holds in the true world."""
+        return self.model.goal_holds(self.facts)
 
     @property
     def facts(self) -> frozenset[Fact]:
@@ -54,11 +89,12 @@ class SimulatedWorld:
         ground = self.model.ground(step)
         with self._lock:
             self.actions_run += 1
+            self.sim_time += self.action_duration
             state = frozenset(self._facts)
             touched = ground.relevant_atoms(state)
             ok = ground.applicable(state)
             if ok and self.fail_rate and self.rng.random() < self.fail_rate:
-                self.faults_injected += 1
+                self.inject("action-failed", str(step), "the action had no effect")
                 ok = False
             if ok:
                 adds, dels = ground.effects(state)
