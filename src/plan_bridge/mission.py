@@ -5,7 +5,11 @@ an ``__init__.py`` (or ``skills.py``) defining::
 
     def setup(task: PlanningTask, *, seed: int, fail_rate: float) -> MissionSetup
 
-which returns the skills (and the simulated world) of the mission. Loading a domain
+which returns the skills (and the simulated world) of the mission, and optionally::
+
+    def scripted(task: PlanningTask, *, seed: int, fail_rate: float) -> ScriptedMission
+
+the same mission written by hand as one SMACH machine (the baseline). Loading a domain
 folder runs its Python code, like importing a module: only run domains you trust.
 Without Python, or for a bare ``domain.pddl``, every action runs as a symbolic skill
 in a simulated world.
@@ -26,7 +30,7 @@ from plan_bridge.errors import PlanBridgeError
 from plan_bridge.simulation import SimulatedWorld, symbolic_skills
 from plan_bridge.skills import SkillRegistry
 
-__all__ = ["MissionSetup", "Target", "TargetError", "load_target"]
+__all__ = ["MissionSetup", "ScriptedMission", "Target", "TargetError", "load_target"]
 
 
 class TargetError(PlanBridgeError):
@@ -43,6 +47,20 @@ class MissionSetup:
     sense: Callable[[Any], Iterable[Any]] | None = None
     concurrent: bool = False
     """Run independent steps (e.g. of two robots) concurrently."""
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass
+class ScriptedMission:
+    """The hand-written baseline of a domain: one SMACH machine with explicit recovery.
+
+    ``machine.execute()`` runs the whole mission in ``world`` (no planner); success is
+    judged by ``world.goal_reached()``, the same check as for planned runs.
+    """
+
+    machine: Any
+    """A ``smach.State`` (normally a StateMachine) whose userdata is already filled."""
+    world: Any
     extra: dict[str, Any] = field(default_factory=dict)
 
 
