@@ -49,6 +49,9 @@ class ReplanPolicy:
     """Skip ahead when the rest of the plan is valid from the belief."""
     repair: bool = True
     """Try a repair prefix before a full replan (STRIPS-style plans only)."""
+    repair_max_prefix_ratio: float = 0.5
+    """Keep a repaired plan only if its new prefix is at most this fraction of the
+    plan it rescues: a long detour means the old plan is a poor fit, so replan."""
     replan: bool = True
     max_replans: int = 10
     """Planner calls after the first one (repairs and replans)."""
@@ -353,6 +356,7 @@ class Executive(smach.Container):
         raise _Stop("aborted", f"{reason}; the policy allows no further recovery")
 
     def _repair(self, rest: list[PlanStep], reason: str) -> list[PlanStep] | None:
+        """Plan a prefix that re-establishes what ``rest`` needs; None if that does not fit."""
         needed = self.model.regress(rest)
         if needed is None:
             return None
@@ -360,17 +364,26 @@ class Executive(smach.Container):
         missing = needed - facts
         if not missing:
             return None
-        self.report.repairs += 1
-        self._decide("repair", f"{reason}; re-establish {_show(missing)}")
-        sub = _with_goal(self.task, needed)
-        prefix = self._plan(f"repair: {reason}", sub, final=False)
+        prefix = self._plan(
+            f"repair: re-establish {_show(missing)}", _with_goal(self.task, needed), final=False
+        )
         if prefix is None:
             return None
         candidate = [*prefix, *rest]
+        limit = max(1, int(self.policy.repair_max_prefix_ratio * len(rest)))
         if not self.model.check_plan(candidate, facts).valid:
-            self._decide("repair-rejected", "the repaired plan does not reach the goal")
-            return None
-        return candidate
+            why = "the repaired plan does not reach the goal"
+        elif len(prefix) > limit:
+            why = (
+                f"the repair needs {len(prefix)} extra steps to rescue {len(rest)} "
+                f"(more than {limit}): a new plan fits better"
+            )
+        else:
+            self.report.repairs += 1
+            self._decide("repair", f"{reason}; {len(prefix)} steps re-establish {_show(missing)}")
+            return candidate
+        self._decide("repair-rejected", why)
+        return None
 
     # -- planning ------------------------------------------------------------------------------
     def _plan(self, reason: str, task: PlanningTask, *, final: bool = True) -> list[PlanStep]:
@@ -480,6 +493,8 @@ def _with_goal(task: PlanningTask, goal: Iterable[Fact]) -> PlanningTask:
     for atom in atoms:
         fluent = problem.fluent(atom[0])
         problem.add_goal(fluent(*(problem.object(a) for a in atom[1:])))
+    # problem_text=None: the planner must write this changed problem, not resend the
+    # original file's text.
     return dataclasses.replace(
-        task, problem=problem, goal_facts=tuple(atoms), goal_is_conjunctive=True
+        task, problem=problem, goal_facts=tuple(atoms), goal_is_conjunctive=True, problem_text=None
     )
