@@ -26,6 +26,7 @@ from smach.exceptions import (
 )
 from smach.state import State
 from smach.user_data import Remapper, UserData
+from smach.util import is_shutdown as _never
 from smach.util import key_list
 
 __all__ = ["StateMachine"]
@@ -297,7 +298,8 @@ class StateMachine(Container):
                         # Callbacks read get_active_states(): show the new state.
                         self._current_slot = target
                         self._emit_transition(label, outcome, target.label)
-                    if smach.is_shutdown():
+                    # The default check never says yes; skip the call unless replaced.
+                    if smach.is_shutdown is not _never and smach.is_shutdown():
                         return None
                     slot = target
                     continue

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import copy
 from collections.abc import Iterable, Iterator, Mapping
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from smach.exceptions import InvalidUserCodeError, UndeclaredKeyError, UserDataKeyError
 from smach.introspection.events import UserdataWritten, stamp
@@ -178,6 +178,8 @@ class Remapper(UserData):
     _remap: dict[str, str]
     _owner: State | None
     _writer: str
+    #: Fast subclasses (make_remapper): declared output key -> container key.
+    _writes: ClassVar[dict[str, str]] = {}
 
     def __init__(
         self,
@@ -317,13 +319,32 @@ _REMAPPER_CLASSES: dict[
 
 
 def _fast_setattr(self: Remapper, name: str, value: Any) -> None:
-    try:
-        object.__setattr__(self, name, value)
-    except AttributeError:
-        self._write(name, value)  # raises the undeclared-key error with its message
+    # One Python call per write: the declared output keys of this class are in
+    # _writes (state key -> container key); anything else takes the slow path.
+    target = self._writes.get(name)
+    if target is None:
+        if name.startswith("_"):
+            object.__setattr__(self, name, value)
+        else:
+            self._write(name, value)  # remapped non-identifier key, or the undeclared-key error
+        return
+    self._d[target] = value  # type: ignore[index]
+    owner = self._owner
+    if owner is not None and owner._bus.listeners:
+        t, thread = stamp()
+        owner._bus.emit(
+            UserdataWritten(
+                path=owner._path,
+                time=t,
+                thread=thread,
+                key=target,
+                value=value,
+                writer=self._writer,
+            )
+        )
 
 
-def _key_property(key: str, target: str, readable: bool, writable: bool, const: bool) -> property:
+def _key_property(key: str, target: str, const: bool) -> property:
     def get(self: Remapper) -> Any:
         # Fast classes only ever wrap a plain UserData, so _d is its dict.
         data: dict[str, Any] = self._d  # type: ignore[assignment]
@@ -331,25 +352,11 @@ def _key_property(key: str, target: str, readable: bool, writable: bool, const: 
             value = data[target]
         except KeyError:
             raise UserDataKeyError(key, data) from None
-        return get_const(value) if const else value
+        if const and type(value) not in _PLAIN:
+            return get_const(value)
+        return value
 
-    def put(self: Remapper, value: Any) -> None:
-        self._d[target] = value  # type: ignore[index]
-        owner = self._owner
-        if owner is not None and owner._bus.listeners:
-            t, thread = stamp()
-            owner._bus.emit(
-                UserdataWritten(
-                    path=owner._path,
-                    time=t,
-                    thread=thread,
-                    key=target,
-                    value=value,
-                    writer=self._writer,
-                )
-            )
-
-    return property(get if readable else None, put if writable else None)
+    return property(get)
 
 
 def make_remapper(
@@ -369,13 +376,15 @@ def make_remapper(
     signature = (ins, outs, tuple(sorted(remap.items())))
     cls = _REMAPPER_CLASSES.get(signature)
     if cls is None:
-        namespace: dict[str, Any] = {"__slots__": (), "__setattr__": _fast_setattr}
-        for key in ins | outs:
-            if not key.isidentifier() or key.startswith("_") or hasattr(Remapper, key):
-                continue  # reached through __getattr__/__getitem__ as before
-            namespace[key] = _key_property(
-                key, remap.get(key, key), key in ins, key in outs, key in ins and key not in outs
-            )
+        fast = {k for k in ins | outs if k.isidentifier() and not k.startswith("_")}
+        fast -= set(dir(Remapper))  # never shadow a method
+        namespace: dict[str, Any] = {
+            "__slots__": (),
+            "__setattr__": _fast_setattr,
+            "_writes": {k: remap.get(k, k) for k in outs & fast},
+        }
+        for key in ins & fast:
+            namespace[key] = _key_property(key, remap.get(key, key), key not in outs)
         cls = type("Remapper", (Remapper,), namespace)
         _REMAPPER_CLASSES[signature] = cls
     return cls(ud, ins, outs, remap, owner=owner, writer=writer)
