@@ -268,7 +268,7 @@ class StateMachine(Container):
             bus = self._bus
             if bus.listeners or self._local:
                 self._emit_started([slot.label])
-            if smach.is_shutdown():
+            if smach.is_shutdown is not _never and smach.is_shutdown():
                 return None
             while True:
                 label = slot.label
@@ -310,7 +310,8 @@ class StateMachine(Container):
             self._current_slot = None
             if bus.listeners or self._local:
                 self._emit_terminated([label], final)
-            self._end(parent_ud)
+            if parent_ud is not None and self._output_keys:
+                self._copy_output_keys(parent_ud)
             return final
         except Exception as exc:
             self._emit_error(exc)
