@@ -177,6 +177,11 @@ class Executive(smach.Container):
         if userdata is not None:
             self.userdata.update(userdata)
 
+    def consistency_problems(self) -> list[str]:
+        # Plans are compiled (and checked) at run time; the skills check builds every
+        # skill once, so it runs on demand (check_consistency, `plan-bridge check`).
+        return []
+
     def check_consistency(self) -> None:
         problems = self.skills.check(self.task)
         if problems:
@@ -364,8 +369,10 @@ class Executive(smach.Container):
         missing = needed - facts
         if not missing:
             return None
+        # The goal atoms travel to the planner, which derives the repair problem from
+        # the task it already parsed (no PDDL is written or parsed).
         prefix = self._plan(
-            f"repair: re-establish {_show(missing)}", _with_goal(self.task, needed), final=False
+            f"repair: re-establish {_show(missing)}", self.task, final=False, goal=needed
         )
         if prefix is None:
             return None
@@ -386,7 +393,14 @@ class Executive(smach.Container):
         return None
 
     # -- planning ------------------------------------------------------------------------------
-    def _plan(self, reason: str, task: PlanningTask, *, final: bool = True) -> list[PlanStep]:
+    def _plan(
+        self,
+        reason: str,
+        task: PlanningTask,
+        *,
+        final: bool = True,
+        goal: frozenset[Fact] | None = None,
+    ) -> list[PlanStep]:
         """Plan from the belief; raise _Stop when the budget or the planner says no."""
         policy = self.policy
         report = self.report
@@ -401,7 +415,7 @@ class Executive(smach.Container):
                 "aborted", f"planning time budget ({policy.planning_time_budget} s) exhausted"
             )
         timeout = min(policy.planner_timeout, remaining)
-        result = self._solve(task, timeout)
+        result = self._solve(task, timeout, goal)
         report.planner_calls += 1
         report.planning_time_s += result.planning_time_s
         if self._observed():
@@ -425,7 +439,9 @@ class Executive(smach.Container):
             raise _Stop("aborted", f"no plan ({result.status.value}): {result.explanation}")
         return list(result.actions)
 
-    def _solve(self, task: PlanningTask, timeout: float) -> PlanResult:
+    def _solve(
+        self, task: PlanningTask, timeout: float, goal: frozenset[Fact] | None = None
+    ) -> PlanResult:
         """Solve in a helper thread so that a preempt request is answered at once."""
         box: list[PlanResult | BaseException] = []
         done = threading.Event()
@@ -433,7 +449,12 @@ class Executive(smach.Container):
 
         def work() -> None:
             try:
-                box.append(self.planner.solve(task, timeout=timeout, initial_state=facts))
+                if goal is None:
+                    box.append(self.planner.solve(task, timeout=timeout, initial_state=facts))
+                else:
+                    box.append(
+                        self.planner.solve(task, timeout=timeout, initial_state=facts, goal=goal)
+                    )
             except BaseException as exc:
                 box.append(exc)
             finally:

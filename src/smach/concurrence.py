@@ -16,7 +16,7 @@ from typing import Any, ClassVar
 
 from smach import worker_pool
 from smach.container import Container, construction_method
-from smach.exceptions import InvalidStateError, InvalidTransitionError, InvalidUserCodeError
+from smach.exceptions import InvalidStateError, InvalidUserCodeError
 from smach.introspection.events import Event, StateEntered, StateExited
 from smach.state import State
 from smach.user_data import Remapper, UserData
@@ -161,15 +161,8 @@ class Concurrence(Container):
                     )
         return problems
 
-    def check_consistency(self) -> None:
-        problems = self.consistency_problems()
-        if problems:
-            raise InvalidTransitionError(
-                f"concurrence {self._path} is inconsistent:\n  " + "\n  ".join(problems)
-            )
-
     def _compile(self) -> list[_Child]:
-        self.check_consistency()
+        self._check_before_run()
         children = [
             _Child(label, state, self._remapper(label, state, self._remappings[label]))
             for label, state in self._states.items()

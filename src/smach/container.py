@@ -32,6 +32,7 @@ from smach.exceptions import (
     InvalidConstructionError,
     InvalidOutcomeError,
     InvalidStateError,
+    InvalidTransitionError,
     InvalidUserCodeError,
     NoContainerOpenError,
     SmachError,
@@ -481,9 +482,15 @@ class Container(State):
                 self._clear_preempt()
 
     def _child_error(self, label: str, state: State, exc: Exception) -> InvalidUserCodeError:
-        """Wrap an exception raised by a child's execute(), naming the child's path."""
-        if isinstance(exc, SmachError) and isinstance(exc, InvalidUserCodeError):
-            return exc
+        """Wrap an exception raised by a child's execute(), naming the child's path.
+
+        Errors that already name where they happened pass through unchanged: user-code
+        errors, and smach's errors raised by a nested container.
+        """
+        if isinstance(exc, InvalidUserCodeError) or (
+            isinstance(exc, SmachError) and isinstance(state, Container)
+        ):
+            return exc  # type: ignore[return-value]
         return InvalidUserCodeError(
             f"state {self._path}/{label} ({type(state).__name__}) raised "
             f"{type(exc).__name__}: {exc}"
@@ -528,10 +535,51 @@ class Container(State):
         raise NotImplementedError
 
     def check_consistency(self) -> None:
+        """Raise :class:`InvalidTransitionError` listing every problem of this container."""
+        self._raise_problems(self.consistency_problems())
+
+    def consistency_problems(self) -> list[str]:
+        """Every reason this container (alone) cannot run, one line each."""
         raise NotImplementedError
+
+    def _raise_problems(self, problems: list[str]) -> None:
+        if problems:
+            count = f"{len(problems)} problem{'s' if len(problems) > 1 else ''}"
+            raise InvalidTransitionError(
+                f"{_KIND_NAMES.get(type(self).__name__, type(self).__name__)} {self._path} is "
+                f"inconsistent ({count}):\n  " + "\n  ".join(problems)
+            )
+
+    def subtree_problems(self) -> list[str]:
+        """The consistency problems of this container and of every container below it."""
+        problems: list[str] = []
+        stack: list[State] = [self]
+        while stack:
+            node = stack.pop()
+            if isinstance(node, Container):
+                try:
+                    problems.extend(node.consistency_problems())
+                except NotImplementedError:
+                    try:
+                        node.check_consistency()
+                    except SmachError as exc:
+                        problems.append(f"{node._path}: {exc}")
+                stack.extend(reversed(list(node.get_children().values())))
+        return problems
+
+    def _check_before_run(self) -> None:
+        """Refuse to run if anything in the tree below is inconsistent (all problems at once)."""
+        self._raise_problems(self.subtree_problems())
 
     def is_running(self) -> bool:
         return bool(self.get_active_states())
+
+
+_KIND_NAMES = {
+    "StateMachine": "state machine",
+    "Concurrence": "concurrence",
+    "Iterator": "iterator",
+}
 
 
 def _raw_get(ud: UserData, key: str) -> Any:

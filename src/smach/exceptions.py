@@ -72,10 +72,13 @@ class UserDataKeyError(SmachError, KeyError, AttributeError):
     ``hasattr(ud, 'k')`` and ``getattr(ud, 'k', default)`` work on ``ud.k``).
     """
 
-    def __init__(self, key: str, available: Iterable[object]) -> None:
+    def __init__(
+        self, key: str, available: Iterable[object], remapped_to: str | None = None
+    ) -> None:
         keys = sorted(str(k) for k in available)
         listed = ", ".join(repr(k) for k in keys) if keys else "none"
-        super().__init__(f"userdata key {key!r} is not available; available keys: {listed}")
+        where = f" (remapped to {remapped_to!r})" if remapped_to and remapped_to != key else ""
+        super().__init__(f"userdata key {key!r}{where} is not available; available keys: {listed}")
         self.key = key
 
     def __str__(self) -> str:  # KeyError would otherwise repr() the message

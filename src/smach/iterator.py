@@ -11,7 +11,7 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any
 
 from smach.container import Container, construction_method
-from smach.exceptions import InvalidStateError, InvalidTransitionError, InvalidUserCodeError
+from smach.exceptions import InvalidStateError, InvalidUserCodeError
 from smach.state import State
 from smach.user_data import Remapper, UserData
 from smach.util import key_list
@@ -118,19 +118,12 @@ class Iterator(Container):
                 )
         return problems
 
-    def check_consistency(self) -> None:
-        problems = self.consistency_problems()
-        if problems:
-            raise InvalidTransitionError(
-                f"iterator {self._path} is inconsistent:\n  " + "\n  ".join(problems)
-            )
-
     # -- execution -------------------------------------------------------------------------------
     def execute(self, parent_ud: UserData | None = None) -> str | None:
         """Run the contained state once per item; return the (mapped) final outcome."""
         remapper = self._remapper_cache
         if remapper is None:
-            self.check_consistency()
+            self._check_before_run()
             assert self._state is not None and self._state_label is not None
             remapper = self._remapper(self._state_label, self._state, self._remapping)
             self._remapper_cache = remapper

@@ -6,8 +6,9 @@ pause between attempts. The pause is preempt-aware.
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 
+from smach.container import construction_method
 from smach.exceptions import InvalidStateError
 from smach.state import State
 from smach.util import key_list
@@ -50,6 +51,17 @@ class Retry(Wrapper):
         self.backoff_factor = backoff_factor
         self.max_backoff = max_backoff
         self.attempts_used = 0
+
+    @construction_method
+    def add(self, label: str, state: State, remapping: Mapping[str, str] | None = None) -> State:
+        """Set the child to retry; its outcomes must include every retry outcome."""
+        missing = [o for o in self.retry_outcomes if o not in state.get_registered_outcomes()]
+        if missing:
+            raise InvalidStateError(
+                f"{self._path}/{label}: retry outcomes {missing} are not outcomes of the child "
+                f"({', '.join(state.get_registered_outcomes())}); pass retry_outcomes=[...]"
+            )
+        return super().add(label, state, remapping)
 
     def consistency_problems(self) -> list[str]:
         problems = super().consistency_problems()

@@ -68,6 +68,7 @@ class StateMachine(Container):
         self._preempt_lock = threading.Lock()
         self._is_running = False
         self._slots: dict[str, _Slot] | None = None
+        self._last_outcome: str | None = None
 
     # -- construction ------------------------------------------------------------------------
     @construction_method
@@ -218,17 +219,8 @@ class StateMachine(Container):
                     )
         return problems
 
-    def check_consistency(self) -> None:
-        """Raise :class:`InvalidTransitionError` listing every problem, if any."""
-        problems = self.consistency_problems()
-        if problems:
-            raise InvalidTransitionError(
-                f"state machine {self._path} is inconsistent ({len(problems)} problem"
-                f"{'s' if len(problems) > 1 else ''}):\n  " + "\n  ".join(problems)
-            )
-
     def _compile(self) -> dict[str, _Slot]:
-        self.check_consistency()
+        self._check_before_run()
         slots = {
             label: _Slot(
                 label,
@@ -305,6 +297,7 @@ class StateMachine(Container):
                     continue
                 break
             final = target
+            self._last_outcome = outcome
             if self._preempt_requested and not slot.state._preempt_requested:
                 self.service_preempt()
             self._current_slot = None
@@ -408,6 +401,6 @@ class StateMachine(Container):
             )
         elif isinstance(event, ContainerTerminated):
             smach.loginfo(
-                f"State machine terminating '{event.terminal_states[0]}':'{event.outcome}':"
+                f"State machine terminating '{event.terminal_states[0]}':'{self._last_outcome}':"
                 f"'{event.outcome}'"
             )

@@ -227,8 +227,7 @@ class Remapper(UserData):
         else:
             value = data.get(target, _MISSING)
             if value is _MISSING:
-                where = f" (remapped to {target!r})" if target != key else ""
-                raise UserDataKeyError(key + where, data)
+                raise UserDataKeyError(key, data, target)
         if key in self._rw:
             return value
         return get_const(value)
@@ -351,7 +350,7 @@ def _key_property(key: str, target: str, const: bool) -> property:
         try:
             value = data[target]
         except KeyError:
-            raise UserDataKeyError(key, data) from None
+            raise UserDataKeyError(key, data, target) from None
         if const and type(value) not in _PLAIN:
             return get_const(value)
         return value

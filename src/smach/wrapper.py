@@ -99,13 +99,6 @@ class Wrapper(Container):
             if o not in self._outcomes
         ]
 
-    def check_consistency(self) -> None:
-        problems = self.consistency_problems()
-        if problems:
-            raise InvalidTransitionError(
-                f"{type(self).__name__} {self._path} is inconsistent:\n  " + "\n  ".join(problems)
-            )
-
     # -- execution ---------------------------------------------------------------------------
     def run(self, child: State, label: str) -> str:
         """Run the child (with :meth:`run_child`) and return the container's outcome."""
@@ -132,7 +125,7 @@ class Wrapper(Container):
 
     def execute(self, parent_ud: UserData | None = None) -> str | None:
         if self._remapper_cache is None:
-            self.check_consistency()
+            self._check_before_run()
             assert self._child is not None and self._label is not None
             self._remapper_cache = self._remapper(self._label, self._child, self._remapping)
         child, label = self._child, self._label

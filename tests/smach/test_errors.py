@@ -453,3 +453,41 @@ def test_error_message_of_missing_key_is_not_a_repr_of_the_message() -> None:
     with pytest.raises(KeyError) as info:
         ud["nope"]
     assert not str(info.value).startswith('"')
+
+
+def test_nested_inconsistency_is_reported_before_anything_runs() -> None:
+    from smach.testing import ScriptedState
+
+    first = ScriptedState(["ok"])
+    sub = smach.StateMachine(["done"])
+    sub.add("A", ScriptedState(["x"]), transitions={"x": "NOWHERE"})
+    root = smach.StateMachine(["done"])
+    root.add("FIRST", first, transitions={"ok": "SUB"})
+    root.add("SUB", sub)
+    with pytest.raises(
+        smach.InvalidTransitionError,
+        match=r"/ROOT/SUB/A: outcome 'x' leads to unknown target 'NOWHERE'",
+    ):
+        root.execute()
+    assert first.call_count == 0
+    assert root.subtree_problems() and root.consistency_problems() == []
+
+
+def test_terminating_log_line_names_the_last_state_its_outcome_and_the_container_outcome() -> None:
+    from smach.testing import ScriptedState
+
+    lines: list[str] = []
+    smach.set_loggers(lines.append, lines.append, lines.append, lines.append)
+    sm = smach.StateMachine(outcomes=["done"])
+    sm.add("PLACE", ScriptedState(["placed"]), transitions={"placed": "done"})
+    sm.execute()
+    assert "State machine terminating 'PLACE':'placed':'done'" in lines
+
+
+def test_missing_remapped_key_error_names_both_keys() -> None:
+    ud = smach.UserData()
+    r = smach.Remapper(ud, ["goal"], [], {"goal": "target"})
+    with pytest.raises(KeyError) as info:
+        r.goal  # noqa: B018
+    assert info.value.key == "goal"  # type: ignore[attr-defined]
+    assert "userdata key 'goal' (remapped to 'target') is not available" in str(info.value)

@@ -26,9 +26,11 @@ def test_retry_returns_the_last_outcome_when_attempts_run_out() -> None:
 
 
 def test_retry_infers_outcomes_and_keys_from_the_child_through_remapping() -> None:
-    child = ScriptedState(["done"], input_keys=["target"], output_keys=["result"])
+    child = ScriptedState(
+        ["done"], outcomes=["done", "aborted"], input_keys=["target"], output_keys=["result"]
+    )
     retry = smach.Retry.wrap("X", child, remapping={"target": "goal", "result": "out"})
-    assert set(retry.get_registered_outcomes()) == {"done", "preempted"}
+    assert set(retry.get_registered_outcomes()) == {"done", "aborted", "preempted"}
     assert retry.get_registered_input_keys() == ("goal",)
     assert retry.get_registered_output_keys() == ("out",)
 
@@ -91,14 +93,13 @@ def test_bad_retry_parameters_are_refused(kwargs: dict[str, object]) -> None:
         smach.Retry(**kwargs)  # type: ignore[arg-type]
 
 
-def test_retry_outcome_the_child_does_not_have_is_a_consistency_error() -> None:
+def test_retry_outcome_the_child_does_not_have_is_refused_when_added() -> None:
     retry = smach.Retry(retry_outcomes=["missed"])
-    retry.add("X", ScriptedState(["done"]))
-    with pytest.raises(smach.InvalidTransitionError, match="retry outcome 'missed'"):
-        retry.execute()
+    with pytest.raises(smach.InvalidStateError, match=r"retry outcomes \['missed'\]"):
+        retry.add("X", ScriptedState(["done"]))
 
 
 def test_a_retry_holds_one_child() -> None:
-    retry = smach.Retry.wrap("X", ScriptedState(["done"]))
+    retry = smach.Retry.wrap("X", ScriptedState(["done"]), retry_outcomes=["done"])
     with pytest.raises(smach.InvalidStateError, match="holds one child"):
         retry.add("Y", ScriptedState(["done"]))
