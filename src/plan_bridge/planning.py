@@ -15,9 +15,12 @@ killed at the deadline, so ``timeout`` holds for engines that ignore it.
 
 from __future__ import annotations
 
+import dataclasses
 import enum
+import threading
 import time
 import warnings
+import weakref
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Any, Protocol, runtime_checkable
@@ -25,8 +28,8 @@ from typing import Any, Protocol, runtime_checkable
 from plan_bridge.domain import Fact, FactLike, PlanningTask, format_fact
 from plan_bridge.errors import PlannerNotFoundError
 from plan_bridge.reachability import ReachabilityReport, relaxed_unreachable_goals
-from plan_bridge.up_runtime import ensure_unified_planning
-from plan_bridge.worker import SolveReply, WorkerPool, default_pool
+from plan_bridge.up_runtime import ensure_unified_planning, lean_copy
+from plan_bridge.worker import ProblemText, SolveReply, WorkerPool, default_pool
 
 __all__ = [
     "DEFAULT_PLANNER",
@@ -88,6 +91,9 @@ class PlanResult:
     """Time spent in the engine inside the worker."""
     log: str = ""
     """The tail of the engine's log."""
+    problem_reused: bool = False
+    """True when the worker derived the problem from one it had parsed before (a
+    replan's fast path: no PDDL parsing)."""
 
     @property
     def solved(self) -> bool:
@@ -124,9 +130,11 @@ class Planner(Protocol):
         *,
         timeout: float,
         initial_state: Iterable[FactLike] | None = None,
+        goal: Iterable[FactLike] | None = None,
     ) -> PlanResult:
         """Plan for ``task``; ``initial_state`` (true ground facts) replaces the
-        task's initial state for this solve (closed world)."""
+        task's initial state for this solve (closed world), and ``goal`` (ground
+        atoms) replaces its goal by their conjunction."""
         ...
 
 
@@ -180,6 +188,9 @@ class UPPlanner:
         self._engine = engine
         self._pool = pool
         self.explain_timeout = explain_timeout
+        self._unsupported: weakref.WeakKeyDictionary[PlanningTask, list[str]] = (
+            weakref.WeakKeyDictionary()
+        )
 
     @property
     def name(self) -> str:
@@ -242,57 +253,81 @@ class UPPlanner:
         *,
         timeout: float = 60.0,
         initial_state: Iterable[FactLike] | None = None,
+        goal: Iterable[FactLike] | None = None,
     ) -> PlanResult:
         """Plan for ``task`` within ``timeout`` seconds of engine wall-clock time.
+
+        ``initial_state`` (true ground facts) replaces the task's initial state and
+        ``goal`` (ground atoms) replaces its goal by their conjunction, for this solve.
+        The worker keeps the parsed ``task`` (keyed by its PDDL text), so solving the
+        same task again with other facts or goal atoms -- a replan -- does not parse
+        PDDL again.
 
         The limit is hard: the worker is killed at the deadline and the result has
         status ``timeout``. (Starting a worker, about 0.5 s, happens before the
         clock starts; :meth:`warm_up` moves it out of the way.) Raises
-        :class:`~plan_bridge.errors.FactError` for an ``initial_state`` fact that
-        does not fit the task.
+        :class:`~plan_bridge.errors.FactError` for an ``initial_state`` fact or goal
+        atom that does not fit the task.
         """
         if timeout <= 0:
             raise ValueError(f"timeout must be positive, got {timeout!r}")
         started = time.monotonic()
-        if initial_state is not None:
-            task = task.with_initial_state(initial_state)
+        facts = (
+            None
+            if initial_state is None
+            else frozenset(task.check_fact(fact) for fact in initial_state)
+        )
+        goal_atoms = None if goal is None else tuple(sorted({task.check_fact(a) for a in goal}))
+        # What the explanations of a "no plan" talk about (the UP problem stays the base's).
+        view = task
+        if facts is not None or goal_atoms is not None:
+            view = dataclasses.replace(
+                task,
+                initial_facts=task.initial_facts if facts is None else facts,
+                goal_facts=task.goal_facts if goal_atoms is None else goal_atoms,
+                goal_is_conjunctive=task.goal_is_conjunctive or goal_atoms is not None,
+            )
         ensure_unified_planning()
-        from unified_planning.io import PDDLWriter  # type: ignore[import-untyped]
 
         notes: list[str] = []
-        missing = self.unsupported_features(task)
+        missing = self._unsupported_cached(task)
         if missing:
             notes.append(
                 f"{self._engine} does not declare support for: {', '.join(missing)}; trying anyway"
             )
         try:
-            if task.domain_text is not None and task.problem_text is not None:
-                # Loaded from PDDL: the worker re-reads the very text we read, so names
-                # come back unchanged.
-                writer: Any = None
-                domain_text, problem_text = task.domain_text, task.problem_text
-            else:
-                with warnings.catch_warnings(record=True) as caught:
-                    warnings.simplefilter("always")
-                    writer = PDDLWriter(task.problem)
-                    domain_text = writer.get_domain()
-                    problem_text = writer.get_problem()
-                notes.extend(str(w.message) for w in caught)
+            source = _problem_source(task)
         except Exception as exc:
             return self._finish(
-                task,
+                view,
                 started,
                 PlanStatus.UNSUPPORTED,
                 f"cannot hand this problem to {self._engine} as PDDL: {exc}",
                 notes,
             )
-
-        with self.pool.worker() as worker:
+        notes.extend(source.notes)
+        with self.pool.worker(prefer=source.text.key) as worker:
             reply = worker.solve(
-                self._engine, domain_text, problem_text, timeout, engine_timeout=True
+                self._engine,
+                source.text,
+                timeout,
+                init=None if facts is None else [source.pddl_atom(f) for f in sorted(facts)],
+                goal=None if goal_atoms is None else [source.pddl_atom(a) for a in goal_atoms],
             )
         notes.extend(w for w in reply.warnings if not any(i in w for i in _IGNORED_WARNINGS))
-        return self._interpret(task, started, timeout, reply, writer, notes, missing)
+        result = self._interpret(view, started, timeout, reply, source.writer, notes, missing)
+        return dataclasses.replace(result, problem_reused=True) if reply.reused else result
+
+    def _unsupported_cached(self, task: PlanningTask) -> list[str]:
+        # Computing a UP problem kind takes up to ~0.2 s on large problems; replans of
+        # one task (other facts, positive goal atoms) have the same kind.
+        with _cache_lock:
+            cached = self._unsupported.get(task)
+        if cached is None:
+            cached = self.unsupported_features(task)
+            with _cache_lock:
+                self._unsupported[task] = cached
+        return list(cached)
 
     # -- interpretation ----------------------------------------------------------
     def _interpret(
@@ -455,6 +490,53 @@ class UPPlanner:
             engine_time_s=engine_time_s,
             log=log,
         )
+
+
+_cache_lock = threading.Lock()
+
+
+@dataclasses.dataclass(frozen=True)
+class _ProblemSource:
+    """How a task travels to the workers: its PDDL text and the names used in it."""
+
+    text: ProblemText
+    writer: Any = None
+    """UP's PDDLWriter, when the text was written from a problem built in code."""
+    problem: Any = None
+    """The problem the writer wrote (its items map to PDDL names)."""
+    notes: tuple[str, ...] = ()
+
+    def pddl_atom(self, fact: Fact) -> list[str]:
+        """``fact`` with the names the PDDL text uses."""
+        if self.writer is None:
+            return list(fact)
+        problem, name = self.problem, self.writer.get_pddl_name
+        return [name(problem.fluent(fact[0])), *(name(problem.object(a)) for a in fact[1:])]
+
+
+_written: weakref.WeakKeyDictionary[PlanningTask, _ProblemSource] = weakref.WeakKeyDictionary()
+
+
+def _problem_source(task: PlanningTask) -> _ProblemSource:
+    if task.domain_text is not None and task.problem_text is not None:
+        # Loaded from PDDL: the worker re-reads the very text we read, so names come
+        # back unchanged.
+        return _ProblemSource(ProblemText.of(task.domain_text, task.problem_text))
+    with _cache_lock:
+        cached = _written.get(task)
+    if cached is not None:
+        return cached
+    from unified_planning.io import PDDLWriter  # type: ignore[import-untyped]
+
+    problem = lean_copy(task.problem)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        writer = PDDLWriter(problem)
+        text = ProblemText.of(writer.get_domain(), writer.get_problem())
+    source = _ProblemSource(text, writer, problem, tuple(str(w.message) for w in caught))
+    with _cache_lock:
+        _written[task] = source
+    return source
 
 
 def _first_line(text: str) -> str:

@@ -13,6 +13,13 @@ Two quirks of unified-planning 1.3 shape this module:
   planner worker process.
 * UP prints credits to stdout on every solve; we switch them off, so JSON output
   on stdout stays clean.
+* ``Problem.initial_values`` enumerates *every* ground atom of every predicate
+  (21,000 on visitall problem12) to fill in default values, and ``Problem.kind``
+  recomputes from scratch on each access; UP's PDDL writer (which every PDDL-based
+  engine, Fast Downward included, runs on each solve) calls both. :func:`lean_copy`
+  returns a copy of a problem whose ``initial_values`` lists only what a writer or
+  engine needs and whose ``kind`` is computed once: on visitall this cuts a Fast
+  Downward solve through UP from ~3 s to ~0.7 s.
 """
 
 from __future__ import annotations
@@ -22,7 +29,7 @@ import threading
 import types
 from typing import Any
 
-__all__ = ["ensure_unified_planning"]
+__all__ = ["ensure_unified_planning", "lean_copy"]
 
 _lock = threading.Lock()
 _ready = False
@@ -71,3 +78,70 @@ def ensure_unified_planning() -> None:
             ):
                 del sys.modules["ConfigSpace"]
         _ready = True
+
+
+_lean_class: Any = None
+
+
+def _lean_problem_class() -> Any:
+    global _lean_class
+    if _lean_class is not None:
+        return _lean_class
+    ensure_unified_planning()
+    from unified_planning.model import Problem  # type: ignore[import-untyped]
+    from unified_planning.model.fluent import get_all_fluent_exp  # type: ignore[import-untyped]
+
+    class LeanProblem(Problem):  # type: ignore[misc]
+        """A ``Problem`` with cheap ``initial_values`` and a cached ``kind``.
+
+        ``initial_values`` holds the explicit values plus the defaults of the
+        fluents whose default is not boolean false: the same values that
+        ``Problem.initial_values`` has except ground atoms that are false by default,
+        which PDDL writers and engines skip anyway (closed world). ``kind`` is
+        computed on first access and cached: do not change the problem after that,
+        except for its boolean initial values and positive goal atoms, which do not
+        change the kind of a problem whose boolean fluents default to false.
+        """
+
+        _plan_bridge_kind: Any = None
+
+        @property
+        def initial_values(self) -> dict[Any, Any]:
+            values = dict(self._initial_value)
+            defaults = self._fluent_set.fluents_defaults
+            for fluent in self._fluent_set.fluents:
+                default = defaults.get(fluent)
+                if default is None or (fluent.type.is_bool_type() and default.is_false()):
+                    continue  # no value, or false by default: nothing to add
+                for fluent_exp in get_all_fluent_exp(self._object_set, fluent):
+                    if fluent_exp not in values:
+                        values[fluent_exp] = default
+            return values
+
+        @property
+        def kind(self) -> Any:
+            if self._plan_bridge_kind is None:
+                self._plan_bridge_kind = Problem.kind.fget(self)
+            return self._plan_bridge_kind
+
+        def clone(self) -> Any:
+            copy = Problem.clone(self)
+            copy.__class__ = type(self)
+            return copy
+
+    _lean_class = LeanProblem
+    return _lean_class
+
+
+def lean_copy(problem: Any, *, kind: Any = None) -> Any:
+    """A copy of the UP ``problem`` that is fast to write as PDDL and to solve.
+
+    ``kind``, when given, is used as the copy's problem kind instead of computing it
+    (pass the kind of the problem this one was derived from by changing only boolean
+    initial values and positive goal atoms).
+    """
+    copy = problem.clone()
+    copy.__class__ = _lean_problem_class()
+    if kind is not None:
+        copy._plan_bridge_kind = kind
+    return copy

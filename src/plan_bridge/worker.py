@@ -17,12 +17,23 @@ Why a plain subprocess speaking JSON lines, not ``multiprocessing``:
 Workers are kept warm in a :class:`WorkerPool`: unified-planning is imported once
 per worker (about 0.5 s), and a worker is only replaced after it was killed.
 Run as ``python -m plan_bridge.worker`` it serves requests on stdin/stdout.
+
+**Replans do not re-parse.** A worker keeps the last :data:`BASE_CACHE_SIZE` parsed
+problems, keyed by a hash of their PDDL text (a :class:`ProblemText`). A request
+names its base problem by that key and may carry new initial facts and a new goal
+(lists of atoms); the worker derives the problem to solve from the parsed base
+(a copy with those facts and goal atoms changed) instead of parsing PDDL again,
+which costs up to ~1.5 s on large problems. The PDDL text is only sent when the
+worker has not seen the key yet (the client mirrors each worker's cache, and a
+worker that does not know the key answers ``missing-base``, upon which the text
+is sent within the same deadline).
 """
 
 from __future__ import annotations
 
 import atexit
 import contextlib
+import hashlib
 import json
 import os
 import queue
@@ -33,15 +44,36 @@ import sys
 import tempfile
 import threading
 import time
+from collections import OrderedDict
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import IO, Any
 
 from plan_bridge.errors import WorkerError
 
-__all__ = ["SolveReply", "Worker", "WorkerPool", "default_pool", "serve"]
+__all__ = ["ProblemText", "SolveReply", "Worker", "WorkerPool", "default_pool", "serve"]
 
 STARTUP_TIMEOUT_S = 60.0
 _KILL_GRACE_S = 0.2
+#: Parsed problems a worker keeps (least recently used ones are dropped).
+BASE_CACHE_SIZE = 8
+
+
+@dataclass(frozen=True)
+class ProblemText:
+    """The PDDL text of a base problem and the key workers cache its parse under."""
+
+    domain: str
+    problem: str
+    key: str
+
+    @classmethod
+    def of(cls, domain: str, problem: str) -> ProblemText:
+        digest = hashlib.sha256()
+        digest.update(domain.encode("utf-8"))
+        digest.update(b"\0")
+        digest.update(problem.encode("utf-8"))
+        return cls(domain, problem, digest.hexdigest()[:32])
 
 
 @dataclass(frozen=True)
@@ -59,6 +91,10 @@ class SolveReply:
     warnings: tuple[str, ...] = ()
     log: str = ""
     engine_time_s: float = 0.0
+    parse_time_s: float = 0.0
+    """Time the worker spent parsing PDDL for this solve (0 when it reused a parse)."""
+    reused: bool = False
+    """True when the worker derived the problem from a base it had parsed before."""
 
 
 class Worker:
@@ -93,6 +129,8 @@ class Worker:
         self._next_id = 0
         self.started_at = time.monotonic()
         self.solves = 0
+        # Mirror of the worker's cache of parsed problems (same size and order).
+        self._bases: OrderedDict[str, None] = OrderedDict()
 
     @property
     def pid(self) -> int:
@@ -125,48 +163,53 @@ class Worker:
                 + (f": {detail}" if detail else f" within {timeout:.0f} s")
             )
 
+    def knows(self, key: str) -> bool:
+        """Whether this worker (probably) holds the parse of base problem ``key``."""
+        return key in self._bases
+
     def solve(
-        self, engine: str, domain: str, problem: str, timeout: float, engine_timeout: bool
+        self,
+        engine: str,
+        base: ProblemText,
+        timeout: float,
+        *,
+        init: Iterable[Sequence[str]] | None = None,
+        goal: Iterable[Sequence[str]] | None = None,
+        engine_timeout: bool = True,
     ) -> SolveReply:
-        """Run one solve; kill the worker if it does not answer within ``timeout``."""
+        """Solve ``base`` (with ``init`` as its true initial facts and ``goal`` as its
+        goal conjunction, when given); kill the worker if it does not answer within
+        ``timeout``."""
         self.wait_ready()
-        self._next_id += 1
-        request_id = self._next_id
         workdir = tempfile.mkdtemp(prefix="plan-bridge-solve-")
-        request = {
-            "id": request_id,
+        request: dict[str, Any] = {
             "engine": engine,
-            "domain": domain,
-            "problem": problem,
+            "base": base.key,
+            "init": None if init is None else [list(fact) for fact in init],
+            "goal": None if goal is None else [list(atom) for atom in goal],
             # The engine's own limit is a courtesy (Fast Downward then stops cleanly
             # and reports TIMEOUT); the kill below is what makes the limit hard.
             "timeout": timeout if engine_timeout else None,
             "workdir": workdir,
         }
         started = time.monotonic()
+        deadline = started + timeout + _KILL_GRACE_S
         try:
-            stdin = self.process.stdin
-            assert stdin is not None
-            try:
-                stdin.write(json.dumps(request) + "\n")
-                stdin.flush()
-            except OSError:
-                return SolveReply("crashed", message=self._crash_message())
-            deadline = started + timeout + _KILL_GRACE_S
+            send_text = base.key not in self._bases
             while True:
-                try:
-                    reply = self._replies.get(timeout=max(0.0, deadline - time.monotonic()))
-                except queue.Empty:
-                    self.kill()
-                    return SolveReply(
-                        "timeout",
-                        message=f"no answer within {timeout:g} s: killed the planner process",
-                        engine_time_s=time.monotonic() - started,
-                    )
-                if reply is None:
-                    return SolveReply("crashed", message=self._crash_message())
-                if reply.get("id") == request_id:
-                    break
+                if send_text:
+                    request.update(domain=base.domain, problem=base.problem)
+                reply = self._exchange(request, deadline, timeout, started)
+                if isinstance(reply, SolveReply):
+                    self._bases.pop(base.key, None)
+                    return reply
+                if reply.get("outcome") == "missing-base" and not send_text:
+                    # Our mirror of its cache was wrong: send the text after all.
+                    self._bases.pop(base.key, None)
+                    send_text = True
+                    continue
+                break
+            self._remember(base.key)
             self.solves += 1
             return SolveReply(
                 outcome=str(reply["outcome"]),
@@ -179,9 +222,45 @@ class Worker:
                 warnings=tuple(str(w) for w in reply.get("warnings", [])),
                 log=str(reply.get("log", "")),
                 engine_time_s=float(reply.get("engine_time_s", 0.0)),
+                parse_time_s=float(reply.get("parse_time_s", 0.0)),
+                reused=bool(reply.get("reused", False)),
             )
         finally:
             shutil.rmtree(workdir, ignore_errors=True)
+
+    def _remember(self, key: str) -> None:
+        self._bases[key] = None
+        self._bases.move_to_end(key)
+        while len(self._bases) > BASE_CACHE_SIZE:
+            self._bases.popitem(last=False)
+
+    def _exchange(
+        self, request: dict[str, Any], deadline: float, timeout: float, started: float
+    ) -> dict[str, Any] | SolveReply:
+        """Send one request and wait for its reply until ``deadline``."""
+        self._next_id += 1
+        request_id = request["id"] = self._next_id
+        stdin = self.process.stdin
+        assert stdin is not None
+        try:
+            stdin.write(json.dumps(request) + "\n")
+            stdin.flush()
+        except (OSError, ValueError):
+            return SolveReply("crashed", message=self._crash_message())
+        while True:
+            try:
+                reply = self._replies.get(timeout=max(0.0, deadline - time.monotonic()))
+            except queue.Empty:
+                self.kill()
+                return SolveReply(
+                    "timeout",
+                    message=f"no answer within {timeout:g} s: killed the planner process",
+                    engine_time_s=time.monotonic() - started,
+                )
+            if reply is None:
+                return SolveReply("crashed", message=self._crash_message())
+            if reply.get("id") == request_id:
+                return reply
 
     def _crash_message(self) -> str:
         code = self.process.wait(timeout=5)
@@ -250,18 +329,24 @@ class WorkerPool:
                 self._count += 1
 
     @contextlib.contextmanager
-    def worker(self) -> Any:
-        worker = self._acquire()
+    def worker(self, prefer: str | None = None) -> Any:
+        """Borrow a worker; ``prefer``: a base problem key, to get an idle worker that
+        has that problem parsed already (if there is one)."""
+        worker = self._acquire(prefer)
         try:
             yield worker
         finally:
             self._release(worker)
 
-    def _acquire(self) -> Worker:
+    def _acquire(self, prefer: str | None = None) -> Worker:
         with self._condition:
             while True:
                 if self._closed:
                     raise WorkerError("the planner worker pool is closed")
+                if prefer is not None:
+                    for index, candidate in enumerate(self._idle):
+                        if candidate.knows(prefer) and candidate.is_alive():
+                            return self._idle.pop(index)
                 while self._idle:
                     worker = self._idle.pop()
                     if worker.is_alive():
@@ -363,7 +448,76 @@ def serve(requests: IO[str], replies: IO[str]) -> None:
         replies.flush()
 
 
-_parsed: dict[tuple[str, str], Any] = {}
+class _Base:
+    """A parsed base problem and what deriving problems from it needs."""
+
+    def __init__(self, problem: Any) -> None:
+        from plan_bridge.up_runtime import lean_copy
+
+        self.problem = lean_copy(problem)
+        self.kind = self.problem.kind
+        # Fact -> fluent expression of the atoms true in the base's initial state.
+        self.true_atoms: dict[tuple[str, ...], Any] = {
+            _atom_of(fluent_exp): fluent_exp
+            for fluent_exp, value in self.problem.explicit_initial_values.items()
+            if fluent_exp.type.is_bool_type() and value.is_bool_constant() and value.is_true()
+        }
+        self.goal_atoms = _conjunctive_goal(self.problem.goals)
+
+    def derive(self, init: list[list[str]] | None, goal: list[list[str]] | None) -> Any:
+        """The problem to solve: the base with ``init`` true (all other boolean atoms
+        false) and ``goal`` as its goal; the base itself when neither changes it."""
+        new_init = None if init is None else {tuple(atom) for atom in init}
+        new_goal = None if goal is None else sorted({tuple(atom) for atom in goal})
+        if new_init is not None and new_init == set(self.true_atoms):
+            new_init = None
+        if new_goal is not None and new_goal == self.goal_atoms:
+            new_goal = None
+        if new_init is None and new_goal is None:
+            return self.problem
+        from plan_bridge.up_runtime import lean_copy
+
+        # Changing boolean initial values and positive goal atoms does not change the
+        # problem kind: keep the base's instead of recomputing it on every replan.
+        problem = lean_copy(self.problem, kind=self.kind)
+        if new_init is not None:
+            for atom, fluent_exp in self.true_atoms.items():
+                if atom not in new_init:
+                    problem.set_initial_value(fluent_exp, False)
+            for atom in new_init:
+                if atom not in self.true_atoms:
+                    problem.set_initial_value(_expression(problem, atom), True)
+        if new_goal is not None:
+            problem.clear_goals()
+            for atom in new_goal:
+                problem.add_goal(_expression(problem, atom))
+        return problem
+
+
+def _atom_of(fluent_exp: Any) -> tuple[str, ...]:
+    return (fluent_exp.fluent().name, *(arg.object().name for arg in fluent_exp.args))
+
+
+def _expression(problem: Any, atom: Sequence[str]) -> Any:
+    return problem.fluent(atom[0])(*(problem.object(name) for name in atom[1:]))
+
+
+def _conjunctive_goal(goals: Iterable[Any]) -> list[tuple[str, ...]] | None:
+    """The goal's atoms, sorted, if it is a conjunction of positive ground atoms."""
+    atoms: list[tuple[str, ...]] = []
+    pending = list(goals)
+    while pending:
+        node = pending.pop()
+        if node.is_and():
+            pending.extend(node.args)
+        elif node.is_fluent_exp() and all(arg.is_object_exp() for arg in node.args):
+            atoms.append(_atom_of(node))
+        elif not node.is_true():
+            return None
+    return sorted(set(atoms))
+
+
+_bases: OrderedDict[str, _Base] = OrderedDict()
 
 
 def _solve_request(reader: Any, request: dict[str, Any]) -> dict[str, Any]:
@@ -371,19 +525,27 @@ def _solve_request(reader: Any, request: dict[str, Any]) -> dict[str, Any]:
 
     from unified_planning.shortcuts import OneshotPlanner  # type: ignore[import-untyped]
 
-    key = (request["domain"], request["problem"])
-    problem = _parsed.get(key)
-    if problem is None:
-        problem = reader.parse_problem_string(request["domain"], request["problem"])
-        # Benchmarks and retries solve the same text again: parsing a large problem
-        # costs more than solving it.
-        if len(_parsed) >= 8:
-            _parsed.pop(next(iter(_parsed)))
-        _parsed[key] = problem
+    key = request["base"]
+    base = _bases.get(key)
+    reused = base is not None
+    parse_time = 0.0
+    if base is None:
+        if request.get("domain") is None or request.get("problem") is None:
+            return {"outcome": "missing-base"}
+        parse_started = time.monotonic()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the client reported them when it loaded the task
+            base = _Base(reader.parse_problem_string(request["domain"], request["problem"]))
+        parse_time = time.monotonic() - parse_started
+        _bases[key] = base
+        while len(_bases) > BASE_CACHE_SIZE:
+            _bases.popitem(last=False)
+    _bases.move_to_end(key)
     started = time.monotonic()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
+            problem = base.derive(request.get("init"), request.get("goal"))
             with OneshotPlanner(name=request["engine"]) as planner:
                 result = planner.solve(problem, timeout=request["timeout"])
         except Exception as exc:
@@ -393,6 +555,7 @@ def _solve_request(reader: Any, request: dict[str, Any]) -> dict[str, Any]:
                 "message": str(exc),
                 "warnings": [str(w.message) for w in caught],
                 "engine_time_s": time.monotonic() - started,
+                "parse_time_s": parse_time,
             }
     plan = []
     if result.plan is not None:
@@ -408,6 +571,8 @@ def _solve_request(reader: Any, request: dict[str, Any]) -> dict[str, Any]:
         "warnings": [str(w.message) for w in caught],
         "log": log[-4000:],
         "engine_time_s": time.monotonic() - started,
+        "parse_time_s": parse_time,
+        "reused": reused,
     }
 
 

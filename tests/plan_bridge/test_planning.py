@@ -286,3 +286,96 @@ def test_result_json_shape(doors, fast_downward: UPPlanner) -> None:  # type: ig
         "(move kitchen vault)",
     ] or (payload["plan_length"] == 3)
     json.dumps(payload)
+
+
+def _reaches(task: PlanningTask, steps: list[PlanStep], atom: tuple[str, ...]) -> bool:
+    from plan_bridge.semantics import ActionModel
+
+    model = ActionModel(task)
+    state = task.initial_facts
+    for step in steps:
+        ground = model.ground(step)
+        if not ground.applicable(state):
+            return False
+        state = ground.apply(state)
+    return atom in state
+
+
+# One problem, a different goal atom per solve: a solve that read another solve's
+# output.sas or plan file would return a plan for the wrong goal.
+_BLOCKS_GOALS = [("on", "d", "f"), ("on", "f", "e"), ("on", "e", "h"), ("on", "h", "c")]
+
+
+@pytest.mark.timeout(120)
+def test_concurrent_solves_of_one_problem_from_threads_do_not_mix_files(
+    bench: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    pool = WorkerPool(max_workers=3)
+    planner = UPPlanner("fast-downward", pool=pool)
+    task = load_task(bench / "blocks" / "domain.pddl", bench / "blocks" / "probBLOCKS-8-0.pddl")
+    jobs = [*_BLOCKS_GOALS, *_BLOCKS_GOALS]  # each goal twice: first parse, then reuse
+    results: dict[int, PlanResult] = {}
+
+    def solve(index: int) -> None:
+        results[index] = planner.solve(
+            task, timeout=60, initial_state=task.initial_facts, goal=[jobs[index]]
+        )
+
+    try:
+        threads = [threading.Thread(target=solve, args=(i,)) for i in range(len(jobs))]
+        for thread in threads:
+            thread.start()
+        for thread in threads:
+            thread.join(timeout=100)
+    finally:
+        pool.close()
+    assert len(results) == len(jobs)
+    for index, atom in enumerate(jobs):
+        assert results[index].solved, results[index].explanation
+        assert _reaches(task, results[index].actions, atom), (atom, results[index].plan_strings())
+    assert any(result.problem_reused for result in results.values())
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.timeout(120)
+def test_concurrent_solves_of_one_problem_from_processes_in_one_directory(
+    bench: Path, tmp_path: Path
+) -> None:
+    script = (
+        "import json, sys\n"
+        "from plan_bridge import load_task, get_planner\n"
+        "task = load_task(sys.argv[1], sys.argv[2])\n"
+        "planner = get_planner('fast-downward')\n"
+        "goal = sys.argv[3:]\n"
+        "plans = [planner.solve(task, timeout=60, goal=[goal]).plan_strings() for _ in range(2)]\n"
+        "print(json.dumps(plans))\n"
+    )
+    folder = bench / "blocks"
+    processes = [
+        subprocess.Popen(
+            [
+                sys.executable,
+                "-c",
+                script,
+                str(folder / "domain.pddl"),
+                str(folder / "probBLOCKS-8-0.pddl"),
+                *atom,
+            ],
+            cwd=tmp_path,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        for atom in _BLOCKS_GOALS
+    ]
+    outputs = [p.communicate(timeout=110) for p in processes]
+    task = load_task(folder / "domain.pddl", folder / "probBLOCKS-8-0.pddl")
+    for atom, process, (out, err) in zip(_BLOCKS_GOALS, processes, outputs, strict=True):
+        assert process.returncode == 0, err
+        for plan in json.loads(out):
+            steps = [
+                PlanStep(words[0], tuple(words[1:])) for words in (s[1:-1].split() for s in plan)
+            ]
+            assert _reaches(task, steps, atom), (atom, plan)
+    assert list(tmp_path.iterdir()) == []

@@ -13,6 +13,7 @@ import math
 import os
 import threading
 from collections.abc import Mapping
+from dataclasses import fields
 from pathlib import Path
 from typing import IO, Any
 
@@ -20,7 +21,7 @@ from smach.introspection.events import Event
 from smach.introspection.structure import snapshot
 from smach.state import State
 
-__all__ = ["FORMAT", "Journal", "read_journal", "summarise"]
+__all__ = ["FORMAT", "Journal", "event_record", "read_journal", "summarise"]
 
 FORMAT = "smach-journal/1"
 MAX_REPR = 200
@@ -53,6 +54,35 @@ def summarise(value: Any, depth: int = 0) -> Any:
     return _short_repr(value)
 
 
+_PLAIN = (str, int, float, bool, type(None))
+_FIELDS: dict[type[Event], tuple[str, ...]] = {}
+
+
+def event_record(event: Event) -> dict[str, Any]:
+    """The journal record of ``event``: ``{"kind": ..., field: summary, ...}``.
+
+    The same as summarising every value of ``event.to_dict()``, without its per-call
+    reflection (field names are cached per event class), because journals and viewers
+    call it for every event.
+    """
+    cls = type(event)
+    names = _FIELDS.get(cls)
+    if names is None:
+        names = _FIELDS[cls] = tuple(f.name for f in fields(cls))
+    record: dict[str, Any] = {"kind": event.kind}
+    for name in names:
+        value = getattr(event, name)
+        if type(value) in _PLAIN and not (type(value) is float and not math.isfinite(value)):
+            record[name] = (
+                value
+                if type(value) is not str or len(value) <= MAX_REPR
+                else value[:MAX_REPR] + "…"
+            )
+        else:
+            record[name] = summarise(value)
+    return record
+
+
 def _short_repr(value: Any) -> str:
     try:
         text = repr(value)
@@ -77,12 +107,18 @@ class Journal:
         self._file: IO[str] | None = self.path.open("a" if append else "w", encoding="utf-8")
         self.events_written = 0
         self._root = root
+        # Paths the structure written so far knows: an event about any other path (an
+        # executive compiled a new plan, a container grew) makes the journal write a
+        # fresh ``structure`` record first, so a replay can draw what ran.
+        self._known: set[str] = set()
         if not append:
             import smach
 
             head: dict[str, Any] = {"format": FORMAT, "smach_version": smach.__version__}
             if root is not None:
-                head["structure"] = snapshot(root).to_dict()
+                tree = snapshot(root)
+                self._known = {node.path for node in tree.walk()}
+                head["structure"] = tree.to_dict()
             head.update({k: summarise(v) for k, v in (header or {}).items()})
             self._write({"kind": "header", **head})
         if root is not None and hasattr(root, "add_listener"):
@@ -92,9 +128,19 @@ class Journal:
         self.write_event(event)
 
     def write_event(self, event: Event) -> None:
-        data = event.to_dict()
-        self._write({k: summarise(v) for k, v in data.items()})
+        if self._root is not None and event.path not in self._known:
+            self._write_structure(event.path)
+        self._write(event_record(event))
         self.events_written += 1
+
+    def _write_structure(self, path: str) -> None:
+        assert self._root is not None
+        tree = snapshot(self._root)
+        self._known = {node.path for node in tree.walk()}
+        # A path the tree does not report (a user container without get_children) is
+        # remembered anyway, so it costs one snapshot and not one per event.
+        self._known.add(path)
+        self._write({"kind": "structure", "structure": tree.to_dict()})
 
     def write_record(self, kind: str, **fields: Any) -> None:
         """Write a record that is not an event (e.g. a final summary)."""

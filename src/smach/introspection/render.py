@@ -1,4 +1,4 @@
-"""Render a structure snapshot as Graphviz DOT or Mermaid text.
+"""Render a structure snapshot as Graphviz DOT, Mermaid text or SVG.
 
 Containers become clusters (DOT) or composite states (Mermaid); each container's
 outcomes are drawn as small terminal nodes inside it, so a transition out of a nested
@@ -9,11 +9,11 @@ a given time) can be highlighted.
 from __future__ import annotations
 
 import re
-from collections.abc import Collection
+from collections.abc import Collection, Mapping
 
 from smach.introspection.structure import StateNode
 
-__all__ = ["to_dot", "to_mermaid"]
+__all__ = ["to_dot", "to_mermaid", "to_svg"]
 
 _ACTIVE = "#ffd54f"
 _CONTAINER_FILL = {"StateMachine": "#eef3fb", "Sequence": "#eef3fb", "Concurrence": "#f3eefb"}
@@ -160,3 +160,30 @@ def to_mermaid(root: StateNode, active: Collection[str] = ()) -> str:
 
 def _safe(text: str) -> str:
     return re.sub(r"[^A-Za-z0-9_]", "_", text)
+
+
+def to_svg(
+    root: StateNode,
+    active: Collection[str] = (),
+    *,
+    collapsed: Collection[str] = (),
+    outcomes: Mapping[str, str] | None = None,
+    preempt: Collection[str] = (),
+    title: str | None = None,
+) -> str:
+    """Standalone SVG of ``root`` (our own layout, the live viewer's drawing).
+
+    ``active`` paths are filled yellow, ``collapsed`` container paths drawn as one
+    box, ``outcomes`` (path -> last outcome) written under the labels and ``preempt``
+    paths marked "preempt requested". No Graphviz needed.
+    """
+    from smach.introspection.svg import render_svg
+
+    return render_svg(
+        root,
+        collapsed=collapsed,
+        active=active,
+        outcomes=outcomes,
+        preempt=preempt,
+        title=title,
+    )
