@@ -50,8 +50,8 @@ def register(command: Command) -> Command:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    # The run/check commands live in their own module, which registers them on import.
-    from plan_bridge import mission_commands  # noqa: F401
+    # Subcommands live in their own modules, which register them on import.
+    from plan_bridge import mission_commands, study  # noqa: F401
 
     # argparse exits with 2 on usage errors, which is our "bad input" code.
     parser = argparse.ArgumentParser(
