@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -27,6 +28,7 @@ __all__ = ["COMMANDS", "Command", "main", "register"]
 EXIT_OK = 0
 EXIT_FAILED = 1
 EXIT_BAD_INPUT = 2
+EXIT_INTERNAL = 3
 
 
 @dataclass(frozen=True)
@@ -81,6 +83,25 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("plan-bridge: interrupted", file=sys.stderr)
         return 130
+    except Exception as exc:
+        # A bug of ours or of a domain's code: say what and where, not a traceback
+        # (set PLAN_BRIDGE_DEBUG=1 to get one).
+        if os.environ.get("PLAN_BRIDGE_DEBUG"):
+            raise
+        origin = exc.__traceback__
+        while origin is not None and origin.tb_next is not None:
+            origin = origin.tb_next
+        where = (
+            f" at {origin.tb_frame.f_code.co_filename}:{origin.tb_lineno}"
+            if origin is not None
+            else ""
+        )
+        print(
+            f"plan-bridge: internal error: {type(exc).__name__}: {exc}{where}\n"
+            f"  (this is a bug; PLAN_BRIDGE_DEBUG=1 shows the traceback)",
+            file=sys.stderr,
+        )
+        return EXIT_INTERNAL
 
 
 def progress(message: str, stream: TextIO | None = None) -> None:
@@ -194,4 +215,8 @@ register(
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    # Run as a script, this file is __main__, not plan_bridge.cli, where the commands
+    # register themselves: hand over to the real module.
+    from plan_bridge.cli import main as _main
+
+    sys.exit(_main())

@@ -26,7 +26,7 @@ from typing import Any
 
 import smach
 from plan_bridge.compile import CompiledPlan, StepRecord, compile_plan
-from plan_bridge.domain import Fact, PlanningTask, format_fact
+from plan_bridge.domain import Fact, PlanningTask, format_fact, parse_fact
 from plan_bridge.events import ExecutiveDecision, PlanComputed
 from plan_bridge.planning import Planner, PlanResult, PlanStep, get_planner
 from plan_bridge.semantics import ActionModel
@@ -139,8 +139,16 @@ class Executive(smach.Container):
         check_preconditions: bool = True,
         input_keys: Iterable[str] = (),
         output_keys: Iterable[str] = (),
+        checkpoint: Callable[[dict[str, Any]], None] | None = None,
     ) -> None:
         super().__init__(list(OUTCOMES), input_keys, output_keys)
+        #: Called (from the step's thread) after every succeeded step with the state
+        #: needed to resume: see :meth:`resume_from` and docs/reliability.md.
+        self.checkpoint = checkpoint
+        self._resume: dict[str, Any] | None = None
+        self._checkpoint_lock = threading.Lock()
+        self._plan_in_force: list[PlanStep] = []
+        self._first_in_force = 1
         self.task = task
         self.skills = skills
         self.planner = get_planner(planner) if isinstance(planner, str) else planner
@@ -231,12 +239,16 @@ class Executive(smach.Container):
             self._after_run()
 
     def _mission(self) -> str:
+        resume, self._resume = self._resume, None
+        if resume is not None:
+            plan, first_index = self._restore(resume)
         self._sense()
         if self.model.goal_holds(self.belief.facts):
             self._decide("done", "the goal already holds")
             return "succeeded"
-        plan = self._plan("initial plan", self.task)
-        first_index = 1
+        if resume is None:
+            plan = self._plan("initial plan", self.task)
+            first_index = 1
         while True:
             self._check_preempt()
             outcome, failed = self._run_plan(plan, first_index)
@@ -254,8 +266,14 @@ class Executive(smach.Container):
             else:
                 record = self._records.get(first_index + failed)
                 reason = self._failure_reason(plan[failed], record)
+            # Steps after the failed one may have succeeded already (concurrent layers).
+            rest = [
+                step
+                for i, step in enumerate(plan[failed:], start=first_index + failed)
+                if i == first_index + failed or not self._succeeded(i)
+            ]
             first_index += failed
-            plan = self._recover(plan[failed:], reason, first_index)
+            plan = self._recover(rest, reason, first_index)
 
     def _run_plan(self, plan: list[PlanStep], first_index: int) -> tuple[str, int | None]:
         """Run ``plan``; return (outcome, index in ``plan`` of the first unfinished step)."""
@@ -273,6 +291,7 @@ class Executive(smach.Container):
         compiled.machine._parent = self
         compiled.machine._adopt(self._bus, f"{self._path}/PLAN")
         self._records = {}
+        self._plan_in_force, self._first_in_force = plan, first_index
         self.report.final_plan = [str(s) for s in plan]
         if self._preempt_requested:
             compiled.machine.request_preempt()
@@ -294,15 +313,75 @@ class Executive(smach.Container):
                 return outcome or "aborted", i
         return outcome or "aborted", None
 
+    def _succeeded(self, index: int) -> bool:
+        record = self._records.get(index)
+        return record is not None and record.outcome == "succeeded"
+
     def _step_finished(self, record: StepRecord) -> None:
-        self._records[record.index] = record
+        with self._checkpoint_lock:
+            self._records[record.index] = record
+            report = self.report
+            if record.outcome != "invalid":
+                report.actions_executed += 1
+            if record.outcome == "succeeded":
+                report.executed.append(str(record.step))
+            elif record.outcome in ("aborted", "invalid"):
+                report.actions_failed += 1
+            if record.outcome == "succeeded" and self.checkpoint is not None:
+                self.checkpoint(self.snapshot())
+
+    # -- checkpoints ------------------------------------------------------------------------------
+    def snapshot(self) -> dict[str, Any]:
+        """What a resumed run needs: the plan still to do, the belief, the numbers so far.
+
+        "Done" means a step whose skill succeeded and whose effects were applied to the
+        belief; a step that was running when the process died is not done and runs
+        again after its preconditions are checked against the (restored) belief.
+        """
+        first = self._first_in_force
+        remaining = [
+            str(step)
+            for i, step in enumerate(self._plan_in_force, start=first)
+            if not self._succeeded(i)
+        ]
+        done = [i for i in range(first, first + len(self._plan_in_force)) if self._succeeded(i)]
+        return {
+            "plan": remaining,
+            "first_index": max(done, default=first - 1) + 1,
+            "belief": sorted(format_fact(f) for f in self.belief.facts),
+            "report": self.report.to_json(),
+            "userdata": _json_values(self.userdata),
+        }
+
+    def resume_from(self, snapshot: dict[str, Any]) -> None:
+        """Make the next :meth:`execute` continue from a :meth:`snapshot` (no initial plan)."""
+        for key in ("plan", "first_index", "belief", "report"):
+            if key not in snapshot:
+                raise ValueError(f"not an executive snapshot: the {key!r} entry is missing")
+        self._resume = dict(snapshot)
+
+    def _restore(self, snapshot: dict[str, Any]) -> tuple[list[PlanStep], int]:
+        self.belief.replace(parse_fact(f) for f in snapshot["belief"])
+        saved = snapshot["report"]
         report = self.report
-        if record.outcome != "invalid":
-            report.actions_executed += 1
-        if record.outcome == "succeeded":
-            report.executed.append(str(record.step))
-        elif record.outcome in ("aborted", "invalid"):
-            report.actions_failed += 1
+        for name in (
+            "actions_executed",
+            "actions_failed",
+            "retries",
+            "continues",
+            "repairs",
+            "replans",
+            "planner_calls",
+            "planning_time_s",
+        ):
+            setattr(report, name, saved.get(name, 0))
+        report.executed = list(saved.get("executed", []))
+        report.decisions = list(saved.get("decisions", []))
+        for key, value in snapshot.get("userdata", {}).items():
+            self.userdata[key] = value
+        plan = [PlanStep(f[0], tuple(f[1:])) for f in (parse_fact(s) for s in snapshot["plan"])]
+        self._decide("resume", f"resuming with {len(plan)} steps left from a checkpoint")
+        return plan, int(snapshot["first_index"])
 
     def _failure_reason(self, step: PlanStep, record: StepRecord | None) -> str:
         if record is None:
@@ -499,6 +578,20 @@ class Executive(smach.Container):
     def _begin(self, parent_ud: smach.UserData | None) -> None:
         super()._begin(parent_ud)
         self._retry_counts: dict[tuple[int, str], int] = {}
+
+
+def _json_values(ud: smach.UserData) -> dict[str, Any]:
+    """The userdata values that survive a round trip through JSON (others are skipped)."""
+    import json
+
+    out: dict[str, Any] = {}
+    for key in ud.keys():
+        try:
+            json.dumps(ud[key])
+        except (TypeError, ValueError):
+            continue
+        out[key] = ud[key]
+    return out
 
 
 def _show(facts: Iterable[Fact]) -> str:

@@ -53,9 +53,12 @@ def _non_negative_int(text: str) -> int:
     return value
 
 
-def _configure_target(parser: argparse.ArgumentParser) -> None:
+def _configure_target(parser: argparse.ArgumentParser, optional: bool = False) -> None:
     parser.add_argument(
-        "target", metavar="TARGET", help="a domain folder (domains/NAME) or a domain.pddl"
+        "target",
+        metavar="TARGET",
+        nargs="?" if optional else None,
+        help="a domain folder (domains/NAME) or a domain.pddl",
     )
     parser.add_argument(
         "--problem",
@@ -65,7 +68,7 @@ def _configure_target(parser: argparse.ArgumentParser) -> None:
 
 
 def _configure_run(parser: argparse.ArgumentParser) -> None:
-    _configure_target(parser)
+    _configure_target(parser, optional=True)
     parser.add_argument(
         "--planner",
         default="fast-downward",
@@ -101,6 +104,11 @@ def _configure_run(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--journal", metavar="FILE", help="write every event as JSON lines to FILE")
     parser.add_argument(
+        "--resume",
+        metavar="RUN.jsonl",
+        help="continue a run that was killed, from its journal (TARGET and options come from it)",
+    )
+    parser.add_argument(
         "--json", action="store_true", help="print one JSON object with the results"
     )
     parser.add_argument("--quiet", action="store_true", help="no progress output")
@@ -124,6 +132,44 @@ def _run(args: argparse.Namespace) -> int:
         return fail(f"{getattr(exc, 'filename', '') or ''}: {exc.strerror or exc}")
 
 
+RESUMABLE = (
+    "target",
+    "problem",
+    "seed",
+    "fail_rate",
+    "planner",
+    "policy",
+    "max_replans",
+    "timeout",
+    "concurrent",
+)
+
+
+def _resume_arguments(
+    args: argparse.Namespace,
+) -> tuple[dict[str, Any], dict[str, Any] | None] | int:
+    """Take the run's options from the journal's header; find the last checkpoint."""
+    from smach.introspection.journal import read_journal
+
+    if args.target is not None:
+        return fail("with --resume, the target and options come from the journal: give no TARGET")
+    try:
+        header, records = read_journal(args.resume)
+    except (OSError, ValueError) as exc:
+        return fail(f"{args.resume}: cannot read the journal: {exc}")
+    run = header.get("run")
+    if not isinstance(run, dict) or any(k not in run for k in RESUMABLE):
+        return fail(
+            f"{args.resume}: not a journal of 'plan-bridge run --journal' (no run options in its header)"
+        )
+    for key in RESUMABLE:
+        setattr(args, key, run[key])
+    if any(r.get("kind") == "summary" for r in records):
+        return fail(f"{args.resume}: that run already finished (the journal has its summary)")
+    checkpoints = [r for r in records if r.get("kind") == "checkpoint"]
+    return run, checkpoints[-1] if checkpoints else None
+
+
 def _run_mission(args: argparse.Namespace, started: float) -> int:
     from dataclasses import replace
 
@@ -131,6 +177,14 @@ def _run_mission(args: argparse.Namespace, started: float) -> int:
     from plan_bridge.planning import get_planner
     from smach.introspection.journal import Journal
 
+    checkpoint: dict[str, Any] | None = None
+    if args.resume:
+        resumed = _resume_arguments(args)
+        if isinstance(resumed, int):
+            return resumed
+        _, checkpoint = resumed
+    elif args.target is None:
+        return fail("give a TARGET (a domain folder or a domain.pddl), or --resume RUN.jsonl")
     try:
         policy = replace(
             ReplanPolicy.named(args.policy),
@@ -157,10 +211,16 @@ def _run_mission(args: argparse.Namespace, started: float) -> int:
         sense=setup.sense,
         concurrent=setup.concurrent or args.concurrent,
     )
+    world = setup.world
+    if checkpoint is not None:
+        if checkpoint.get("world") is not None and hasattr(world, "restore"):
+            world.restore(checkpoint["world"])
+        executive.resume_from(checkpoint["state"])
     out = sys.stderr
     if not args.quiet:
+        verb = "resuming" if args.resume else "run"
         print(
-            f"plan-bridge run: {target.name}, problem {target.problem_path.name} "
+            f"plan-bridge {verb}: {target.name}, problem {target.problem_path.name} "
             f"({'symbolic skills' if symbolic else 'domain skills'}, seed {args.seed}, "
             f"fail rate {fail_rate:g}, planner {planner.name})",
             file=out,
@@ -168,18 +228,27 @@ def _run_mission(args: argparse.Namespace, started: float) -> int:
         )
         executive.add_listener(ProgressPrinter(out))
     journal = None
-    if args.journal:
-        journal = Journal(
-            args.journal,
-            executive,
-            header={
-                "target": str(args.target),
-                "problem": str(target.problem_path),
-                "seed": args.seed,
-                "fail_rate": fail_rate,
-                "planner": planner.name,
-            },
+    journal_path = args.resume or args.journal
+    if journal_path:
+        run_options = {key: getattr(args, key) for key in RESUMABLE}
+        run_options.update(
+            target=str(args.target), problem=str(target.problem_path), fail_rate=fail_rate
         )
+        journal = Journal(
+            journal_path,
+            executive,
+            header={**run_options, "run": run_options},
+            append=bool(args.resume),
+        )
+        if args.resume:
+            journal.write_raw("resumed", checkpoint=checkpoint is not None)
+        active_journal = journal
+
+        def write_checkpoint(state: dict[str, Any]) -> None:
+            snap = world.snapshot() if hasattr(world, "snapshot") else None
+            active_journal.write_raw("checkpoint", state=state, world=snap)
+
+        executive.checkpoint = write_checkpoint
     try:
         outcome = executive.execute()
     finally:
@@ -187,7 +256,6 @@ def _run_mission(args: argparse.Namespace, started: float) -> int:
         if journal is not None:
             journal.write_record("summary", **report.to_json())
             journal.close()
-    world = setup.world
     faults = getattr(world, "faults_injected", None)
     if args.json:
         data: dict[str, Any] = {

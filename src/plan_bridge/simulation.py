@@ -9,10 +9,12 @@ This makes any PDDL domain executable without writing skills.
 
 from __future__ import annotations
 
+import dataclasses
 import random
 import threading
 from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import Any
 
 import smach
 from plan_bridge.domain import Fact, PlanningTask
@@ -74,6 +76,28 @@ class SimulatedWorld:
         fault = Fault(self.sim_time, kind, action, detail)
         self.faults.append(fault)
         return fault
+
+    def snapshot(self) -> dict[str, Any]:
+        """The world's state as JSON data (for checkpoints; subclasses add their own)."""
+        with self._lock:
+            version, internal, gauss = self.rng.getstate()
+            return {
+                "facts": sorted(" ".join(f) for f in self._facts),
+                "sim_time": self.sim_time,
+                "actions_run": self.actions_run,
+                "faults": [dataclasses.asdict(f) for f in self.faults],
+                "rng": [version, list(internal), gauss],
+            }
+
+    def restore(self, data: dict[str, Any]) -> None:
+        """Put the world back into a :meth:`snapshot` state."""
+        with self._lock:
+            self._facts = {tuple(f.split()) for f in data["facts"]}
+            self.sim_time = float(data["sim_time"])
+            self.actions_run = int(data.get("actions_run", 0))
+            self.faults = [Fault(**f) for f in data.get("faults", [])]
+            version, internal, gauss = data["rng"]
+            self.rng.setstate((version, tuple(internal), gauss))
 
     def goal_reached(self) -> bool:
         """Whether the task's goal holds in the true world."""

@@ -104,6 +104,8 @@ class Journal:
     ) -> None:
         self.path = Path(path)
         self._lock = threading.Lock()
+        if append:
+            _drop_torn_line(self.path)
         self._file: IO[str] | None = self.path.open("a" if append else "w", encoding="utf-8")
         self.events_written = 0
         self._root = root
@@ -146,6 +148,10 @@ class Journal:
         """Write a record that is not an event (e.g. a final summary)."""
         self._write({"kind": kind, **{k: summarise(v) for k, v in fields.items()}})
 
+    def write_raw(self, kind: str, **fields: Any) -> None:
+        """Write a record exactly as given (it must be JSON data): e.g. checkpoints."""
+        self._write({"kind": kind, **fields})
+
     def _write(self, record: Mapping[str, Any]) -> None:
         line = json.dumps(record, ensure_ascii=False, default=_short_repr)
         with self._lock:
@@ -167,6 +173,15 @@ class Journal:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def _drop_torn_line(path: Path) -> None:
+    """Cut a partial last line (the process died mid-write) before appending."""
+    if not path.exists():
+        return
+    data = path.read_bytes()
+    if data and not data.endswith(b"\n"):
+        path.write_bytes(data[: data.rfind(b"\n") + 1])
 
 
 def read_journal(path: str | os.PathLike[str]) -> tuple[dict[str, Any], list[dict[str, Any]]]:
