@@ -585,7 +585,7 @@ def _json_values(ud: smach.UserData) -> dict[str, Any]:
     import json
 
     out: dict[str, Any] = {}
-    for key in ud.keys():
+    for key in ud:
         try:
             json.dumps(ud[key])
         except (TypeError, ValueError):
