@@ -550,7 +550,15 @@ def authoring_cost(target_path: str, problem: str = "") -> list[dict[str, Any]]:
 
 # -- plots and report -------------------------------------------------------------------------------
 def _plots(summary: list[dict[str, Any]], out: Path) -> list[str]:
-    import matplotlib
+    try:
+        import matplotlib
+    except ImportError:
+        print(
+            "plan-bridge study: matplotlib is not installed, so no plots "
+            "(pip install 'smach-planner[study]')",
+            file=sys.stderr,
+        )
+        return []
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
