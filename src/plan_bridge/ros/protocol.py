@@ -1,0 +1,114 @@
+"""The one generic interface between the executive and a skill server.
+
+Only message packages that ship as PyPI wheels are used: ``test_msgs`` (stable
+across ROS 2 releases) and ``std_srvs``. Their only action types are
+``Fibonacci`` (an ``int32`` goal, ``int32[]`` feedback and result) and
+``NestedMessage`` (numbers and times, no strings), so no action can carry
+"action name + string arguments -> outcome + observations" by itself, and there is
+no ``example_interfaces`` or ``smach_msgs`` wheel. Building our own interface
+package needs the ROS build toolchain. So one skill is three calls, all under
+``<prefix>``:
+
+1. ``submit`` (``test_msgs/srv/BasicTypes``): ``request.string_value`` is the ground
+   action in PDDL text, ``"(pick robot1 cup kitchen)"``; ``response.int64_value``
+   is a ticket (> 0), or 0 with the reason in ``response.string_value``;
+2. ``<action>`` (``test_msgs/action/Fibonacci``, one ROS action per PDDL action,
+   named by :func:`action_topic`: ``switch-on`` is served as ``<prefix>/switch_on``):
+   ``goal.order`` is the ticket; feedback ``sequence`` is ``[percent done]``; the goal
+   ends SUCCEEDED, ABORTED (the action failed) or CANCELED (preempted: the world is
+   unchanged);
+3. ``report`` (``test_msgs/srv/BasicTypes``): ``request.int64_value`` is the ticket;
+   ``response.string_value`` is the JSON object ``{"outcome": "succeeded" | "aborted",
+   "observations": [["(at robot1 hall)", true], ...], "detail": "..."}``.
+
+``perform`` (``BasicTypes``: PDDL text in, JSON result out) does all three in one
+blocking call, for the service transport; ``facts`` (``std_srvs/Trigger``) returns
+the JSON list of the facts true in the simulated world. Payloads are text and JSON:
+parsed, bounded and validated, never evaluated.
+"""
+
+from __future__ import annotations
+
+import importlib
+import json
+import re
+from collections.abc import Iterable
+from typing import Any
+
+from plan_bridge.domain import Fact, format_fact, parse_fact
+
+__all__ = [
+    "FACTS_SERVICE",
+    "MAX_PAYLOAD",
+    "PERFORM_SERVICE",
+    "REPORT_SERVICE",
+    "SUBMIT_SERVICE",
+    "action_topic",
+    "decode_result",
+    "encode_result",
+    "interfaces",
+]
+
+#: Service names below the prefix.
+SUBMIT_SERVICE = "submit"
+REPORT_SERVICE = "report"
+PERFORM_SERVICE = "perform"
+FACTS_SERVICE = "facts"
+#: Largest result payload a client accepts (bytes of JSON).
+MAX_PAYLOAD = 1_000_000
+
+
+def action_topic(prefix: str, action: str) -> str:
+    """The ROS action name of a PDDL action: ``PREFIX/ACTION`` with every character
+    ROS names do not allow (PDDL allows ``-``) replaced by ``_``."""
+    name = re.sub(r"[^A-Za-z0-9_]", "_", action)
+    if name[:1].isdigit():
+        name = "_" + name
+    return f"{prefix.rstrip('/')}/{name}"
+
+
+def encode_result(ok: bool, observations: Iterable[tuple[Fact, bool]], detail: str = "") -> str:
+    return json.dumps(
+        {
+            "outcome": "succeeded" if ok else "aborted",
+            "observations": [[format_fact(fact), bool(truth)] for fact, truth in observations],
+            "detail": detail,
+        }
+    )
+
+
+def decode_result(text: str) -> tuple[str, list[tuple[Fact, bool]], str]:
+    """(outcome, observations, detail) from a result payload; ValueError if malformed."""
+    if not isinstance(text, str) or len(text) > MAX_PAYLOAD:
+        raise ValueError("the result payload is not a string of bounded size")
+    data: Any = json.loads(text)
+    if not isinstance(data, dict):
+        raise ValueError("the result payload is not a JSON object")
+    outcome = data.get("outcome")
+    if outcome not in ("succeeded", "aborted"):
+        raise ValueError(f"the result outcome {outcome!r} is not succeeded or aborted")
+    raw = data.get("observations", [])
+    if not isinstance(raw, list):
+        raise ValueError("observations must be a list of [fact, true/false] pairs")
+    observations: list[tuple[Fact, bool]] = []
+    for item in raw:
+        if (
+            not isinstance(item, list)
+            or len(item) != 2
+            or not isinstance(item[0], str)
+            or not isinstance(item[1], bool)
+        ):
+            raise ValueError(f"observation {item!r} is not a [fact, true/false] pair")
+        observations.append((parse_fact(item[0]), item[1]))
+    detail = data.get("detail", "")
+    return outcome, observations, str(detail)[:1000]
+
+
+def interfaces() -> tuple[Any, Any, Any]:
+    """The message types: (Fibonacci action, BasicTypes service, Trigger service)."""
+    import smach.ros._api  # noqa: F401  (loads rclpy with its one known warning silenced)
+
+    fibonacci = importlib.import_module("test_msgs.action").Fibonacci
+    basic_types = importlib.import_module("test_msgs.srv").BasicTypes
+    trigger = importlib.import_module("std_srvs.srv").Trigger
+    return fibonacci, basic_types, trigger

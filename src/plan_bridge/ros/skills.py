@@ -1,0 +1,190 @@
+"""Skills that run on a remote skill server: a registry of ROS action (or service) clients."""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+import smach
+from plan_bridge.domain import PlanningTask
+from plan_bridge.planning import PlanStep
+from plan_bridge.ros.protocol import (
+    FACTS_SERVICE,
+    PERFORM_SERVICE,
+    REPORT_SERVICE,
+    SUBMIT_SERVICE,
+    action_topic,
+    decode_result,
+    interfaces,
+)
+from plan_bridge.skills import SkillRegistry
+from smach.ros import ServiceState, SimpleActionState
+
+__all__ = ["remote_facts", "ros_skill", "ros_skills"]
+
+TRANSPORTS = ("action", "service")
+
+
+def ros_skill(
+    node: Any,
+    step: PlanStep,
+    *,
+    prefix: str = "skills",
+    transport: str = "action",
+    server_wait_timeout: float = 10.0,
+    exec_timeout: float | None = None,
+    preempt_timeout: float = 10.0,
+) -> smach.State:
+    """The state that performs ``step`` on the skill server under ``prefix``.
+
+    Outcomes ``succeeded``, ``aborted``, ``preempted``; writes ``observations``.
+
+    ``transport="action"`` (default): a StateMachine SUBMIT -> RUN -> REPORT of a
+    :class:`~smach.ros.ServiceState`, a :class:`~smach.ros.SimpleActionState` on
+    ``PREFIX/ACTION`` (a preempt cancels the remote goal) and a ServiceState reading
+    the outcome and observations (see :mod:`plan_bridge.ros.protocol`).
+    ``transport="service"``: one ServiceState on ``PREFIX/perform`` (a preempt
+    abandons the call; the robot finishes the action).
+    """
+    fibonacci, basic_types, _ = interfaces()
+    text = str(step)
+    outcomes = ["succeeded", "aborted", "preempted"]
+
+    @smach.cb_interface(output_keys=["observations"], outcomes=outcomes)
+    def read_result(ud: smach.UserData, response: Any) -> str:
+        try:
+            outcome, observations, detail = decode_result(response.string_value)
+        except ValueError as exc:
+            smach.logerr(f"skill {text}: malformed result from the skill server: {exc}")
+            return "aborted"
+        ud.observations = observations
+        if detail:
+            smach.loginfo(f"skill {text}: {detail}")
+        return outcome
+
+    if transport == "service":
+        request = basic_types.Request()
+        request.string_value = text
+        return ServiceState(
+            node,
+            f"{prefix}/{PERFORM_SERVICE}",
+            basic_types,
+            request=request,
+            response_cb=read_result,
+            server_wait_timeout=server_wait_timeout,
+            call_timeout=exec_timeout,
+        )
+    if transport != "action":
+        raise ValueError(f"unknown transport {transport!r}; transports: {', '.join(TRANSPORTS)}")
+
+    @smach.cb_interface(output_keys=["ticket"], outcomes=["refused"])
+    def take_ticket(ud: smach.UserData, response: Any) -> str:
+        if response.int64_value <= 0:
+            smach.logerr(f"skill {text}: the skill server refused it: {response.string_value}")
+            return "refused"
+        ud.ticket = response.int64_value
+        return "succeeded"
+
+    @smach.cb_interface(input_keys=["ticket"])
+    def ticket_goal(ud: smach.UserData, goal: Any) -> Any:
+        return fibonacci.Goal(order=ud.ticket)
+
+    @smach.cb_interface(input_keys=["ticket"])
+    def ticket_request(ud: smach.UserData, request: Any) -> Any:
+        request = basic_types.Request()
+        request.int64_value = ud.ticket
+        return request
+
+    submit = basic_types.Request()
+    submit.string_value = text
+    quick = min(server_wait_timeout, 5.0)
+    sm = smach.StateMachine(outcomes=outcomes, output_keys=["observations"])
+    with sm:
+        smach.StateMachine.add(
+            "SUBMIT",
+            ServiceState(
+                node,
+                f"{prefix}/{SUBMIT_SERVICE}",
+                basic_types,
+                request=submit,
+                response_cb=take_ticket,
+                server_wait_timeout=server_wait_timeout,
+                call_timeout=quick,
+            ),
+            transitions={"succeeded": "RUN", "refused": "aborted"},
+        )
+        smach.StateMachine.add(
+            "RUN",
+            SimpleActionState(
+                node,
+                action_topic(prefix, step.action),
+                fibonacci,
+                goal_cb=ticket_goal,
+                server_wait_timeout=server_wait_timeout,
+                exec_timeout=exec_timeout,
+                preempt_timeout=preempt_timeout,
+            ),
+            # A failed action still reports what the robot saw.
+            transitions={"succeeded": "REPORT", "aborted": "REPORT_FAILURE"},
+        )
+        for label, final in (("REPORT", None), ("REPORT_FAILURE", "aborted")):
+            smach.StateMachine.add(
+                label,
+                ServiceState(
+                    node,
+                    f"{prefix}/{REPORT_SERVICE}",
+                    basic_types,
+                    request_cb=ticket_request,
+                    response_cb=read_result,
+                    server_wait_timeout=quick,
+                    call_timeout=quick,
+                ),
+                transitions={} if final is None else {"succeeded": final},
+            )
+    return sm
+
+
+def ros_skills(
+    node: Any,
+    task: PlanningTask,
+    *,
+    prefix: str = "skills",
+    transport: str = "action",
+    registry: SkillRegistry | None = None,
+    **options: Any,
+) -> SkillRegistry:
+    """A registry whose actions (those without a registered skill) run remotely.
+
+    Every action of ``task`` becomes a :func:`ros_skill` client of the skill server
+    (``python -m plan_bridge.ros.skill_server``) under ``prefix``. ``options`` go
+    to :func:`ros_skill` (timeouts).
+    """
+    if transport not in TRANSPORTS:
+        raise ValueError(f"unknown transport {transport!r}; transports: {', '.join(TRANSPORTS)}")
+    del task  # any action of the task is served; kept for symmetry with symbolic_skills
+    registry = registry or SkillRegistry()
+    registry.fallback = lambda step: ros_skill(
+        node, step, prefix=prefix, transport=transport, **options
+    )
+    return registry
+
+
+def remote_facts(node: Any, *, prefix: str = "skills", timeout: float = 10.0) -> list[str]:
+    """The facts true in the skill server's world (its ``facts`` service), as text."""
+    _, _, trigger = interfaces()
+    state = ServiceState(
+        node,
+        f"{prefix}/{FACTS_SERVICE}",
+        trigger,
+        response_key="response",
+        server_wait_timeout=timeout,
+        call_timeout=timeout,
+    )
+    ud = smach.UserData()
+    try:
+        if state.execute(ud) != "succeeded":
+            raise RuntimeError(f"the skill server's {prefix}/{FACTS_SERVICE} did not answer")
+        facts = json.loads(ud.response.message)
+    finally:
+        state.destroy()
+    return [f"({fact})" for fact in facts]
