@@ -109,11 +109,14 @@ class StepState(smach.Wrapper):
         record = StepRecord(self.index, self.ground.step)
         self.record = record
         started = time.monotonic()
-        before = self.belief.facts
-        if self.check_preconditions and not self.ground.applicable(before):
-            record.outcome = "invalid"
-            record.unmet = tuple(self.ground.unmet_preconditions(before))
-            return self._finish(record, started)
+        with self.belief.locked() as facts:
+            if self.check_preconditions and not self.ground.applicable(facts):
+                record.outcome = "invalid"
+                record.unmet = tuple(self.ground.unmet_preconditions(facts))
+                return self._finish(record, started)
+            # Effects are those of the state the step starts in (conditional effects
+            # read it), applied only if the skill succeeds.
+            adds, dels = self.ground.effects(facts)
         data = self._userdata._data
         data["action"] = self.ground.name
         data["arguments"] = self.ground.arguments
@@ -127,7 +130,6 @@ class StepState(smach.Wrapper):
         except ValueError as exc:
             raise smach.InvalidUserCodeError(f"skill {self._path}/{label}: {exc}") from exc
         if outcome == "succeeded":
-            adds, dels = self.ground.effects(before)
             self.belief.apply(adds, dels)
         changed = self.belief.observe(observations)
         record.observations_changed = tuple(

@@ -333,14 +333,17 @@ class ActionModel:
 
     def check_plan(self, steps: Sequence[PlanStep], facts: Facts) -> PlanCheck:
         """Simulate ``steps`` from ``facts``: does every step apply and the goal hold?"""
-        state = frozenset(facts)
+        state = set(facts)  # one copy, updated in place: plans can be long, states big
         for index, step in enumerate(steps):
             ground = self.ground(step)
             if not ground.applicable(state):
-                return PlanCheck(False, state, index, tuple(ground.unmet_preconditions(state)))
-            state = ground.apply(state)
+                unmet = tuple(ground.unmet_preconditions(state))
+                return PlanCheck(False, frozenset(state), index, unmet)
+            adds, dels = ground.effects(state)
+            state -= dels
+            state |= adds
         reached = self.goal_holds(state)
-        return PlanCheck(reached, state, None, (), reached)
+        return PlanCheck(reached, frozenset(state), None, (), reached)
 
     def regress(self, steps: Sequence[PlanStep]) -> frozenset[Fact] | None:
         """Atoms that must hold before ``steps`` for them to reach the goal (STRIPS only).

@@ -114,17 +114,19 @@ class SimulatedWorld:
         with self._lock:
             self.actions_run += 1
             self.sim_time += self.action_duration
-            state = frozenset(self._facts)
-            touched = ground.relevant_atoms(state)
+            # The live set, not a copy: worlds with many static facts would pay a copy
+            # of all of them per action.
+            state = self._facts
+            adds, dels = ground.effects(state)
+            touched = set(ground.precondition_atoms() or ()) | adds | dels
             ok = ground.applicable(state)
             if ok and self.fail_rate and self.rng.random() < self.fail_rate:
                 self.inject("action-failed", str(step), "the action had no effect")
                 ok = False
             if ok:
-                adds, dels = ground.effects(state)
-                self._facts.difference_update(dels)
-                self._facts.update(adds)
-            observations = [(fact, fact in self._facts) for fact in sorted(touched)]
+                state.difference_update(dels)
+                state.update(adds)
+            observations = [(fact, fact in state) for fact in sorted(touched)]
         return ok, observations
 
 

@@ -8,8 +8,9 @@ Concurrence update it from several threads, hence the lock.
 
 from __future__ import annotations
 
+import contextlib
 import threading
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from typing import Any
 
 from plan_bridge.domain import Fact, FactLike, parse_fact
@@ -55,6 +56,12 @@ class WorldState:
         """A snapshot of the true facts."""
         with self._lock:
             return frozenset(self._facts)
+
+    @contextlib.contextmanager
+    def locked(self) -> Iterator[set[Fact]]:
+        """The live set of facts, locked: read it inside the ``with`` block only."""
+        with self._lock:
+            yield self._facts
 
     def holds(self, fact: FactLike) -> bool:
         return parse_fact(fact) in self._facts
