@@ -53,7 +53,7 @@ def register(command: Command) -> Command:
 
 def build_parser() -> argparse.ArgumentParser:
     # Subcommands live in their own modules, which register them on import.
-    from plan_bridge import mission_commands, study  # noqa: F401
+    from plan_bridge import mission_commands, study, view_command  # noqa: F401
 
     # argparse exits with 2 on usage errors, which is our "bad input" code.
     parser = argparse.ArgumentParser(

@@ -10,7 +10,7 @@ from smach.introspection.events import Event
 __all__ = ["ExecutiveDecision", "ObservationsApplied", "PlanComputed", "StepFinished"]
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(slots=True, kw_only=True)
 class PlanComputed(Event):
     """The executive asked the planner for a plan (``path`` is the executive)."""
 
@@ -23,7 +23,7 @@ class PlanComputed(Event):
     explanation: str = ""
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(slots=True, kw_only=True)
 class ExecutiveDecision(Event):
     """What the executive decided and why (``retry``, ``continue``, ``repair``, ...)."""
 
@@ -33,7 +33,7 @@ class ExecutiveDecision(Event):
     step: str = ""
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(slots=True, kw_only=True)
 class StepFinished(Event):
     """A plan step ended (``path`` is the step's state)."""
 
@@ -45,7 +45,7 @@ class StepFinished(Event):
     duration_s: float
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(slots=True, kw_only=True)
 class ObservationsApplied(Event):
     """Observations of a step changed the belief (``path`` is the step's state)."""
 

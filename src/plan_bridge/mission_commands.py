@@ -7,6 +7,7 @@ planning, smach, the domain's code) is imported when a command runs.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 import time
@@ -104,6 +105,14 @@ def _configure_run(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--journal", metavar="FILE", help="write every event as JSON lines to FILE")
     parser.add_argument(
+        "--viewer",
+        nargs="?",
+        const=0,
+        type=_non_negative_int,
+        metavar="PORT",
+        help="serve the live viewer on 127.0.0.1 while the mission runs (default port: any free one)",
+    )
+    parser.add_argument(
         "--resume",
         metavar="RUN.jsonl",
         help="continue a run that was killed, from its journal (TARGET and options come from it)",
@@ -175,6 +184,7 @@ def _run_mission(args: argparse.Namespace, started: float) -> int:
 
     from plan_bridge.executive import Executive, ReplanPolicy
     from plan_bridge.planning import get_planner
+    from smach import SmachError
     from smach.introspection.journal import Journal
 
     checkpoint: dict[str, Any] | None = None
@@ -249,9 +259,26 @@ def _run_mission(args: argparse.Namespace, started: float) -> int:
             active_journal.write_raw("checkpoint", state=state, world=snap)
 
         executive.checkpoint = write_checkpoint
+    viewer = None
+    if args.viewer is not None:
+        from smach.introspection import serve
+
+        viewer = serve(executive, port=args.viewer)
     try:
         outcome = executive.execute()
+    except SmachError as exc:
+        # A skill broke its contract (undeclared key, bad outcome, exception): the
+        # message names the state path; the mission failed.
+        outcome = None
+        executive.report.explanation = str(exc)
+        print(f"plan-bridge: mission failed: {exc}", file=sys.stderr, flush=True)
     finally:
+        if viewer is not None:
+            if sys.stdin.isatty() and sys.stderr.isatty():
+                print(f"viewer: {viewer.url} (the mission ended; Ctrl-C to stop)", file=sys.stderr)
+                with contextlib.suppress(KeyboardInterrupt):
+                    viewer.wait()
+            viewer.close()
         report = executive.report
         if journal is not None:
             journal.write_record("summary", **report.to_json())

@@ -40,7 +40,7 @@ def stamp() -> tuple[float, str]:
     return time.monotonic(), threading.current_thread().name
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(slots=True, kw_only=True)
 class Event:
     """Base of every event: what it is about (``path``), when, and in which thread."""
 
@@ -57,7 +57,7 @@ class Event:
         return data
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(slots=True, kw_only=True)
 class ContainerStarted(Event):
     """A container began an execution; ``path`` is the container."""
 
@@ -66,7 +66,7 @@ class ContainerStarted(Event):
     initial_states: tuple[str, ...]
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(slots=True, kw_only=True)
 class StateEntered(Event):
     """A child state is about to execute; ``path`` is the child."""
 
@@ -74,7 +74,7 @@ class StateEntered(Event):
     label: str
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(slots=True, kw_only=True)
 class StateExited(Event):
     """A child state returned ``outcome``; ``path`` is the child."""
 
@@ -83,7 +83,7 @@ class StateExited(Event):
     outcome: str | None
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(slots=True, kw_only=True)
 class Transition(Event):
     """A container moved from one child to the next; ``path`` is the container."""
 
@@ -93,21 +93,21 @@ class Transition(Event):
     target: str
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(slots=True, kw_only=True)
 class PreemptRequested(Event):
     """Somebody asked the state at ``path`` to stop."""
 
     kind: ClassVar[str] = "preempt_requested"
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(slots=True, kw_only=True)
 class PreemptServiced(Event):
     """The state at ``path`` acknowledged a preempt request."""
 
     kind: ClassVar[str] = "preempt_serviced"
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(slots=True, kw_only=True)
 class UserdataWritten(Event):
     """A state wrote ``key`` of the container at ``path``; ``value`` is the live object."""
 
@@ -117,7 +117,7 @@ class UserdataWritten(Event):
     writer: str
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(slots=True, kw_only=True)
 class ContainerTerminated(Event):
     """A container finished with ``outcome`` (``None`` on shutdown)."""
 
@@ -126,7 +126,7 @@ class ContainerTerminated(Event):
     outcome: str | None
 
 
-@dataclass(frozen=True, slots=True, kw_only=True)
+@dataclass(slots=True, kw_only=True)
 class ErrorRaised(Event):
     """An error left the container at ``path``."""
 

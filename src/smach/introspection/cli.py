@@ -1,0 +1,166 @@
+"""``python -m smach.introspection``: view, replay and export journals.
+
+::
+
+    python -m smach.introspection view RUN.jsonl [--port N] [--host H] [--follow]
+    python -m smach.introspection export RUN.jsonl --format dot|mermaid|svg
+                                         [--at SECONDS | --event N] [-o FILE]
+
+``plan-bridge view`` and ``plan-bridge export`` reuse :func:`configure_view`,
+:func:`configure_export`, :func:`run_view` and :func:`run_export`.
+Exit codes: 0 success, 2 bad input (one line on stderr, no traceback).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+__all__ = [
+    "add_moment",
+    "build_parser",
+    "configure_export",
+    "configure_view",
+    "main",
+    "run_export",
+    "run_view",
+]
+
+EXIT_OK = 0
+EXIT_BAD_INPUT = 2
+
+
+def _port(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a port number, got {text!r}") from None
+    if not 0 <= value <= 65535:
+        raise argparse.ArgumentTypeError(f"expected a port number 0..65535, got {text!r}")
+    return value
+
+
+def _seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected seconds (a number), got {text!r}") from None
+    if not 0 <= value < float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a number of seconds >= 0, got {text!r}")
+    return value
+
+
+def _count(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
+    return value
+
+
+def add_moment(parser: argparse.ArgumentParser) -> None:
+    moment = parser.add_mutually_exclusive_group()
+    moment.add_argument(
+        "--at", type=_seconds, metavar="SECONDS", help="the moment SECONDS after the first event"
+    )
+    moment.add_argument(
+        "--event", type=_count, metavar="N", help="the moment after the first N events"
+    )
+
+
+def configure_export(parser: argparse.ArgumentParser, *, format_required: bool = True) -> None:
+    """Arguments of ``export`` (journal, --format, --at/--event, -o)."""
+    parser.add_argument("journal", metavar="RUN.jsonl", help="a journal (JSON lines)")
+    parser.add_argument(
+        "--format",
+        choices=("dot", "mermaid", "svg"),
+        required=format_required,
+        help="dot (Graphviz), mermaid (stateDiagram-v2) or svg (no Graphviz needed)",
+    )
+    add_moment(parser)
+    parser.add_argument("-o", "--output", metavar="FILE", help="write to FILE (default: stdout)")
+
+
+def configure_view(parser: argparse.ArgumentParser) -> None:
+    """Arguments of ``view`` (journal, --port, --host, --follow)."""
+    parser.add_argument("journal", metavar="RUN.jsonl", help="a journal (JSON lines)")
+    parser.add_argument(
+        "--port", type=_port, default=0, help="port to listen on (default: a free one)"
+    )
+    parser.add_argument(
+        "--host",
+        default="127.0.0.1",
+        help="address to bind (default 127.0.0.1; anything else exposes the page to the network)",
+    )
+    parser.add_argument(
+        "--follow", action="store_true", help="keep reading lines appended to the journal"
+    )
+
+
+def _fail(prog: str, message: str) -> int:
+    print(f"{prog}: error: {message}", file=sys.stderr, flush=True)
+    return EXIT_BAD_INPUT
+
+
+def run_export(args: argparse.Namespace, prog: str = "smach-viewer") -> int:
+    from smach.introspection.export import export_journal
+
+    try:
+        text = export_journal(args.journal, args.format, at=args.at, event=args.event)
+    except (OSError, ValueError) as exc:
+        return _fail(prog, f"{args.journal}: {getattr(exc, 'strerror', None) or exc}")
+    if args.output:
+        try:
+            Path(args.output).write_text(text, encoding="utf-8")
+        except OSError as exc:
+            return _fail(prog, f"{args.output}: {exc.strerror or exc}")
+        print(f"{prog}: wrote {args.output}", file=sys.stderr)
+    else:
+        sys.stdout.write(text)
+    return EXIT_OK
+
+
+def run_view(args: argparse.Namespace, prog: str = "smach-viewer") -> int:
+    from smach.introspection.server import serve
+    from smach.introspection.source import JournalSource
+
+    try:
+        source = JournalSource(args.journal, follow=args.follow)
+    except (OSError, ValueError) as exc:
+        return _fail(prog, f"{args.journal}: {getattr(exc, 'strerror', None) or exc}")
+    try:
+        viewer = serve(source, port=args.port, host=args.host, quiet=True)
+    except OSError as exc:
+        source.close()
+        return _fail(prog, f"cannot listen on {args.host}:{args.port}: {exc.strerror or exc}")
+    print(f"{prog}: replaying {args.journal} at {viewer.url} (Ctrl-C to stop)", file=sys.stderr)
+    sys.stderr.flush()
+    viewer.wait()
+    return EXIT_OK
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="python -m smach.introspection",
+        description="Replay and export smach journals (JSON lines written by "
+        "smach.introspection.journal.Journal).",
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    configure_view(sub.add_parser("view", help="serve the viewer page over a journal (replay)"))
+    configure_export(
+        sub.add_parser(
+            "export", help="write DOT, Mermaid or SVG of a journal's machine at a given moment"
+        )
+    )
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    if args.command == "view":
+        return run_view(args)
+    return run_export(args)

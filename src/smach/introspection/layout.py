@@ -1,0 +1,489 @@
+"""Lay out a structure snapshot for drawing: our own layered layout, no Graphviz.
+
+The same layout feeds the live page (the server sends the SVG it draws) and the
+static SVG export, so what a test or a screenshot sees is what ``to_svg`` writes.
+
+Each container is laid out on its own, bottom-up: children are ranked by the
+longest path from the initial state (back edges ignored), a rank with many states
+(a Concurrence) is split into rows, and a long chain is wrapped into columns so that
+50 or 1000 states still fit a screen. The container's outcomes sit in a row at its
+bottom; an edge leaving a nested container starts at the outcome it returned.
+Collapsed containers are drawn as one box.
+
+Text is measured with the advance widths of Arial / Liberation Sans (the page's
+font), so boxes fit their labels without a browser.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Collection
+from dataclasses import dataclass, field
+
+from smach.introspection.structure import StateNode
+
+__all__ = ["EdgeShape", "Layout", "Shape", "layout", "text_width"]
+
+FONT_SIZE = 12.0
+SMALL_FONT = 10.0
+NODE_H = 40.0
+NODE_MIN_W = 76.0
+NODE_PAD = 14.0
+HEADER = 26.0
+PAD = 14.0
+GAP_X = 28.0
+GAP_Y = 42.0
+OUTCOME_H = 20.0
+OUTCOME_GAP = 10.0
+MAX_PER_ROW = 6
+MIN_ROWS_PER_COLUMN = 8
+TALL = 700.0  # a stack of rows taller than this (and than wide) wraps into columns
+
+# Advance widths of Arial (= Liberation Sans) in 1/1000 em, for ASCII 32..126.
+_WIDTHS = [
+    278, 278, 355, 556, 556, 889, 667, 191, 333, 333, 389, 584, 278, 333, 278, 278,
+    556, 556, 556, 556, 556, 556, 556, 556, 556, 556, 278, 278, 584, 584, 584, 556,
+    1015, 667, 667, 722, 722, 667, 611, 778, 722, 278, 500, 667, 556, 833, 722, 778,
+    667, 778, 722, 667, 611, 722, 667, 944, 667, 667, 611, 278, 278, 278, 469, 556,
+    333, 556, 556, 500, 556, 556, 278, 556, 556, 222, 222, 500, 222, 833, 556, 556,
+    556, 556, 333, 500, 278, 556, 500, 722, 500, 500, 500, 334, 260, 334, 584,
+]  # fmt: skip
+
+
+def text_width(text: str, size: float = FONT_SIZE, bold: bool = False) -> float:
+    """Width of ``text`` in pixels in Arial at ``size`` (a little generous)."""
+    units = 0
+    for ch in text:
+        code = ord(ch)
+        units += _WIDTHS[code - 32] if 32 <= code <= 126 else 600
+    return units * size / 1000.0 * (1.08 if bold else 1.02)
+
+
+@dataclass
+class Shape:
+    """A box: a state, a container (cluster), a collapsed container, or an outcome pill."""
+
+    kind: str
+    """``state``, ``container``, ``collapsed`` or ``outcome``."""
+    path: str
+    label: str
+    type: str
+    x: float
+    y: float
+    w: float
+    h: float
+    depth: int = 0
+    count: int = 0
+    """States inside a collapsed container."""
+    container: str = ""
+    """For outcome pills: the container whose outcome this is."""
+
+
+@dataclass
+class EdgeShape:
+    """A transition drawn from ``source`` to ``target`` inside ``container``."""
+
+    container: str
+    source: str
+    outcome: str
+    target: str
+    terminal: bool
+    d: str
+    label_x: float
+    label_y: float
+
+
+@dataclass
+class Layout:
+    width: float
+    height: float
+    shapes: list[Shape] = field(default_factory=list)
+    edges: list[EdgeShape] = field(default_factory=list)
+
+
+@dataclass
+class _Block:
+    """A laid-out subtree with coordinates relative to its own top-left corner."""
+
+    w: float
+    h: float
+    shapes: list[Shape]
+    edges: list[EdgeShape]
+    pills: dict[str, Shape] = field(default_factory=dict)
+    """For an expanded container: its outcome pills by outcome (relative coordinates)."""
+    box: Shape | None = None
+
+
+def _count(node: StateNode) -> int:
+    return sum(1 for _ in node.walk()) - 1
+
+
+def _leaf(node: StateNode, depth: int, collapsed: bool) -> _Block:
+    sub = f"▸ {_count(node)} states" if collapsed else ""
+    w = max(
+        NODE_MIN_W,
+        text_width(node.label, FONT_SIZE, bold=True) + 2 * NODE_PAD,
+        text_width(sub, SMALL_FONT) + 2 * NODE_PAD,
+    )
+    shape = Shape(
+        "collapsed" if collapsed else "state",
+        node.path,
+        node.label,
+        node.type,
+        0.0,
+        0.0,
+        w,
+        NODE_H,
+        depth,
+        _count(node) if collapsed else 0,
+    )
+    return _Block(w, NODE_H, [shape], [], box=shape)
+
+
+def _ranks(node: StateNode) -> dict[str, int]:
+    labels = [c.label for c in node.children]
+    succ: dict[str, list[str]] = {label: [] for label in labels}
+    for edge in node.edges:
+        if not edge.terminal and edge.source in succ and edge.target in succ:
+            succ[edge.source].append(edge.target)
+    # Depth-first from the initial states (then any state not reached) to find the
+    # back edges; the longest path over the remaining edges gives the rank.
+    order: list[str] = []
+    state: dict[str, int] = {}
+    back: set[tuple[str, str]] = set()
+    starts = [s for s in node.initial_states if s in succ] + labels
+    for start in starts:
+        if start in state:
+            continue
+        stack: list[tuple[str, int]] = [(start, 0)]
+        state[start] = 1
+        while stack:
+            v, i = stack[-1]
+            if i < len(succ[v]):
+                stack[-1] = (v, i + 1)
+                w = succ[v][i]
+                if state.get(w) == 1:
+                    back.add((v, w))
+                elif w not in state:
+                    state[w] = 1
+                    stack.append((w, 0))
+            else:
+                stack.pop()
+                state[v] = 2
+                order.append(v)
+    rank = dict.fromkeys(labels, 0)
+    for v in reversed(order):
+        for w in succ[v]:
+            if (v, w) not in back and rank[w] < rank[v] + 1:
+                rank[w] = rank[v] + 1
+    return rank
+
+
+def _container(node: StateNode, collapsed: Collection[str], depth: int) -> _Block:
+    blocks: dict[str, _Block] = {}
+    for child in node.children:
+        blocks[child.label] = _block(child, collapsed, depth + 1)
+    rank = _ranks(node)
+    by_rank: dict[int, list[str]] = {}
+    for child in node.children:
+        by_rank.setdefault(rank[child.label], []).append(child.label)
+    preds: dict[str, list[str]] = {c.label: [] for c in node.children}
+    for edge in node.edges:
+        if not edge.terminal and edge.target in preds and edge.source in preds:
+            preds[edge.target].append(edge.source)
+    # Rows: ranks top to bottom, each ordered by its predecessors' positions.
+    rows: list[list[str]] = []
+    position: dict[str, float] = {}
+    for r in sorted(by_rank):
+        members = by_rank[r]
+        members.sort(
+            key=lambda lb: (
+                sum(position[p] for p in preds[lb] if p in position)
+                / max(1, sum(1 for p in preds[lb] if p in position))
+                if any(p in position for p in preds[lb])
+                else 1e9
+            )
+        )
+        for start in range(0, len(members), MAX_PER_ROW):
+            row = members[start : start + MAX_PER_ROW]
+            for i, label in enumerate(row):
+                position[label] = i - (len(row) - 1) / 2
+            rows.append(row)
+    columns = _columns(rows, blocks)
+
+    top = HEADER + PAD
+    shapes: list[Shape] = []
+    edges: list[EdgeShape] = []
+    placed: dict[str, tuple[float, float, _Block]] = {}
+    x = PAD
+    content_h = 0.0
+    for column in columns:
+        col_w = max(
+            (sum(blocks[lb].w for lb in row) + GAP_X * (len(row) - 1) for row in column),
+            default=0.0,
+        )
+        y = top
+        for row in column:
+            row_w = sum(blocks[lb].w for lb in row) + GAP_X * (len(row) - 1)
+            row_h = max(blocks[lb].h for lb in row)
+            cx = x + (col_w - row_w) / 2
+            for label in row:
+                placed[label] = (cx, y, blocks[label])
+                cx += blocks[label].w + GAP_X
+            y += row_h + GAP_Y
+        content_h = max(content_h, y - GAP_Y - top)
+        x += col_w + GAP_X * 1.6
+    content_w = max(0.0, x - GAP_X * 1.6 - PAD)
+
+    pill_ws = [max(46.0, text_width(o, SMALL_FONT) + 18) for o in node.outcomes]
+    pills_w = sum(pill_ws) + OUTCOME_GAP * max(0, len(pill_ws) - 1)
+    title_w = text_width(f"{node.label}  {node.type}", FONT_SIZE, bold=True) + 40
+    inner_w = max(content_w, pills_w, title_w, NODE_MIN_W)
+    w = inner_w + 2 * PAD
+    pill_y = top + content_h + (GAP_Y if node.children else 0)
+    h = pill_y + OUTCOME_H + PAD
+
+    # Centre the content if the container is wider than it (long titles, many pills).
+    shift = (inner_w - content_w) / 2
+    for label, (bx, by, block) in list(placed.items()):
+        placed[label] = (bx + shift, by, block)
+
+    box = Shape("container", node.path, node.label, node.type, 0.0, 0.0, w, h, depth)
+    shapes.append(box)
+    pills: dict[str, Shape] = {}
+    px = PAD + (inner_w - pills_w) / 2
+    for outcome, pw in zip(node.outcomes, pill_ws, strict=True):
+        pill = Shape(
+            "outcome",
+            f"{node.path}:{outcome}",
+            outcome,
+            "outcome",
+            px,
+            pill_y,
+            pw,
+            OUTCOME_H,
+            depth,
+            container=node.path,
+        )
+        pills[outcome] = pill
+        shapes.append(pill)
+        px += pw + OUTCOME_GAP
+    for _label, (bx, by, block) in placed.items():
+        shapes.extend(_moved(s, bx, by) for s in block.shapes)
+        edges.extend(_moved_edge(e, bx, by) for e in block.edges)
+
+    # Edges of this container.
+    out_count: dict[str, int] = {}
+    for edge in node.edges:
+        if edge.source in placed:
+            out_count[edge.source] = out_count.get(edge.source, 0) + 1
+    out_seen: dict[str, int] = {}
+    lanes: dict[str, float] = {}
+    for edge in node.edges:
+        if edge.source not in placed:
+            continue
+        sx0, sy0, sblock = placed[edge.source]
+        k = out_seen.get(edge.source, 0)
+        out_seen[edge.source] = k + 1
+        pill_of_source = sblock.pills.get(edge.outcome)
+        if pill_of_source is not None:
+            sx = sx0 + pill_of_source.x + pill_of_source.w / 2
+            sy = sy0 + pill_of_source.y + pill_of_source.h
+            s_right = sx0 + sblock.w
+            s_mid = sy0 + pill_of_source.y + pill_of_source.h / 2
+        else:
+            m = out_count[edge.source]
+            sx = sx0 + sblock.w * (k + 1) / (m + 1)
+            sy = sy0 + sblock.h
+            s_right = sx0 + sblock.w
+            s_mid = sy0 + sblock.h / 2
+        if edge.terminal:
+            target_pill = pills.get(edge.target)
+            if target_pill is None:
+                continue
+            tx, ty = target_pill.x + target_pill.w / 2, target_pill.y
+            t_right, t_mid = target_pill.x + target_pill.w, target_pill.y + target_pill.h / 2
+        elif edge.target in placed:
+            tx0, ty0, tblock = placed[edge.target]
+            tx, ty = tx0 + tblock.w / 2, ty0
+            t_right, t_mid = tx0 + tblock.w, ty0 + min(tblock.h / 2, NODE_H / 2)
+        else:
+            continue
+        if edge.source == edge.target and not edge.terminal:
+            d = (
+                f"M{s_right:.1f},{s_mid - 8:.1f} C{s_right + 40:.1f},{s_mid - 30:.1f} "
+                f"{s_right + 40:.1f},{s_mid + 30:.1f} {s_right:.1f},{s_mid + 8:.1f}"
+            )
+            lx, ly = s_right + 34, s_mid
+        elif ty > sy + 4 and (lane := _lane(placed, edge, sx, sy, tx, ty, lanes)) is not None:
+            # A long edge would cross the states between: run it down a lane beside them.
+            d = (
+                f"M{sx:.1f},{sy:.1f} C{sx:.1f},{sy + 16:.1f} {lane:.1f},{sy + 6:.1f} "
+                f"{lane:.1f},{sy + 28:.1f} L{lane:.1f},{ty - 28:.1f} C{lane:.1f},{ty - 6:.1f} "
+                f"{tx:.1f},{ty - 16:.1f} {tx:.1f},{ty:.1f}"
+            )
+            lx, ly = lane, sy + 40
+        elif ty > sy + 4:
+            dy = max(24.0, (ty - sy) / 2)
+            d = (
+                f"M{sx:.1f},{sy:.1f} C{sx:.1f},{sy + dy:.1f} {tx:.1f},{ty - dy:.1f} "
+                f"{tx:.1f},{ty:.1f}"
+            )
+            lx, ly = _bezier_mid((sx, sy), (sx, sy + dy), (tx, ty - dy), (tx, ty))
+        elif abs(tx - sx) > max(sblock.w, 60) and ty < sy:
+            # Into the next column of a wrapped chain: leave downwards, arrive from above.
+            d = (
+                f"M{sx:.1f},{sy:.1f} C{sx:.1f},{sy + 60:.1f} {tx:.1f},{ty - 60:.1f} "
+                f"{tx:.1f},{ty:.1f}"
+            )
+            lx, ly = _bezier_mid((sx, sy), (sx, sy + 60), (tx, ty - 60), (tx, ty))
+        else:
+            # Back edge: around the right-hand side.
+            bulge = 36 + abs(s_mid - t_mid) * 0.15
+            right = max(s_right, t_right)
+            d = (
+                f"M{s_right:.1f},{s_mid:.1f} C{right + bulge:.1f},{s_mid:.1f} "
+                f"{right + bulge:.1f},{t_mid:.1f} {t_right:.1f},{t_mid:.1f}"
+            )
+            lx, ly = right + bulge * 0.75, (s_mid + t_mid) / 2
+        edges.append(
+            EdgeShape(node.path, edge.source, edge.outcome, edge.target, edge.terminal, d, lx, ly)
+        )
+    # Back edges may bulge out on the right: make room.
+    extra = 0.0
+    for e in edges:
+        if e.container == node.path and e.label_x + 30 > w:
+            extra = max(extra, e.label_x + 30 - w)
+    for lane in lanes.values():
+        extra = max(extra, lane + PAD - w)
+    if extra:
+        w += extra
+        box.w = w
+    return _Block(w, h, shapes, edges, pills, box)
+
+
+def _lane(
+    placed: dict[str, tuple[float, float, _Block]],
+    edge: object,
+    sx: float,
+    sy: float,
+    tx: float,
+    ty: float,
+    lanes: dict[str, float],
+) -> float | None:
+    """The x of a vertical lane for a downward edge that would cross boxes, if any.
+
+    Edges into the same target share its lane (they merge like a bus), so a plan
+    whose every step can abort into one outcome draws one lane, not one per step.
+    """
+    source = getattr(edge, "source", "")
+    target = getattr(edge, "target", "")
+    lo, hi = min(sx, tx) - 10, max(sx, tx) + 10
+    between = [
+        (x, y, b)
+        for label, (x, y, b) in placed.items()
+        if label not in (source, target) and y > sy and y + b.h < ty and x < hi and x + b.w > lo
+    ]
+    if not between:
+        return None
+    right = max(x + b.w for x, _, b in between)
+    right = max(right, sx, tx)
+    key = f"{getattr(edge, 'terminal', False)}:{target}"
+    shared = lanes.get(key)
+    if shared is not None and shared >= right + 18:
+        return shared
+    lane = right + 18
+    while any(abs(lane - other) < 12 for k, other in lanes.items() if k != key):
+        lane += 12
+    lanes[key] = max(lane, shared or 0.0)
+    return lanes[key]
+
+
+def _columns(rows: list[list[str]], blocks: dict[str, _Block]) -> list[list[list[str]]]:
+    """Wrap long or tall stacks of rows into columns, aiming at a landscape picture."""
+    sizes = [
+        (
+            sum(blocks[lb].w for lb in row) + GAP_X * (len(row) - 1),
+            max(blocks[lb].h for lb in row) + GAP_Y,
+        )
+        for row in rows
+    ]
+    total_h = sum(h for _, h in sizes)
+    max_w = max((w for w, _ in sizes), default=0.0)
+    tall = len(rows) >= 3 and total_h > max(1.5 * max_w, TALL)
+    if len(rows) <= MIN_ROWS_PER_COLUMN and not tall:
+        return [rows] if rows else [[]]
+    area = sum(w * h for w, h in sizes)
+    limit = max(*(h for _, h in sizes), math.sqrt(area / 1.5))
+    columns: list[list[list[str]]] = [[]]
+    height = 0.0
+    for row, (_, h) in zip(rows, sizes, strict=True):
+        if columns[-1] and height + h > limit:
+            columns.append([])
+            height = 0.0
+        columns[-1].append(row)
+        height += h
+    return columns
+
+
+def _bezier_mid(
+    p0: tuple[float, float],
+    p1: tuple[float, float],
+    p2: tuple[float, float],
+    p3: tuple[float, float],
+) -> tuple[float, float]:
+    return (
+        (p0[0] + 3 * p1[0] + 3 * p2[0] + p3[0]) / 8,
+        (p0[1] + 3 * p1[1] + 3 * p2[1] + p3[1]) / 8,
+    )
+
+
+def _moved(shape: Shape, dx: float, dy: float) -> Shape:
+    return Shape(
+        shape.kind,
+        shape.path,
+        shape.label,
+        shape.type,
+        shape.x + dx,
+        shape.y + dy,
+        shape.w,
+        shape.h,
+        shape.depth,
+        shape.count,
+        shape.container,
+    )
+
+
+def _moved_edge(edge: EdgeShape, dx: float, dy: float) -> EdgeShape:
+    parts = []
+    for token in edge.d.split(" "):
+        cmd = token[0] if token[0].isalpha() else ""  # M, C or L
+        xs, ys = token[len(cmd) :].split(",")
+        parts.append(f"{cmd}{float(xs) + dx:.1f},{float(ys) + dy:.1f}")
+    return EdgeShape(
+        edge.container,
+        edge.source,
+        edge.outcome,
+        edge.target,
+        edge.terminal,
+        " ".join(parts),
+        edge.label_x + dx,
+        edge.label_y + dy,
+    )
+
+
+def _block(node: StateNode, collapsed: Collection[str], depth: int) -> _Block:
+    if not node.is_container:
+        return _leaf(node, depth, False)
+    if depth > 0 and node.path in collapsed:
+        return _leaf(node, depth, True)
+    return _container(node, collapsed, depth)
+
+
+def layout(root: StateNode, collapsed: Collection[str] = ()) -> Layout:
+    """Coordinates of every box and edge of ``root``; ``collapsed`` container paths are boxes."""
+    block = _block(root, set(collapsed), 0)
+    margin = 8.0
+    shapes = [_moved(s, margin, margin) for s in block.shapes]
+    edges = [_moved_edge(e, margin, margin) for e in block.edges]
+    return Layout(block.w + 2 * margin, block.h + 2 * margin, shapes, edges)
