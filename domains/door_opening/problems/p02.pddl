@@ -1,0 +1,27 @@
+; An office floor: from the lab to the server room, through a corridor with many doors.
+(define (problem lab-to-server-room)
+  (:domain door-opening)
+  (:objects pr2 - robot
+            lab corridor-west corridor-east kitchen meeting-room office server-room - room
+            lab-door kitchen-door kitchen-back-door meeting-door meeting-back-door
+            office-door office-back-door server-door fire-door - door)
+  (:init (at pr2 lab)
+         (door-between lab-door lab corridor-west) (door-between lab-door corridor-west lab)
+         (door-between kitchen-door corridor-west kitchen) (door-between kitchen-door kitchen corridor-west)
+         (door-between kitchen-back-door kitchen meeting-room) (door-between kitchen-back-door meeting-room kitchen)
+         (door-between meeting-door corridor-east meeting-room) (door-between meeting-door meeting-room corridor-east)
+         (door-between meeting-back-door meeting-room server-room) (door-between meeting-back-door server-room meeting-room)
+         (door-between office-door corridor-east office) (door-between office-door office corridor-east)
+         (door-between office-back-door office server-room) (door-between office-back-door server-room office)
+         (door-between server-door corridor-east server-room) (door-between server-door server-room corridor-east)
+         (door-between fire-door corridor-west corridor-east) (door-between fire-door corridor-east corridor-west)
+         (passage lab kitchen) (passage kitchen lab)
+         (door-closed lab-door) (door-closed kitchen-door) (door-closed kitchen-back-door)
+         (door-closed meeting-door) (door-closed meeting-back-door) (door-closed office-door)
+         (door-closed office-back-door) (door-closed server-door)
+         (door-closed fire-door)
+         (unlocked lab-door) (unlocked kitchen-door) (unlocked kitchen-back-door)
+         (unlocked meeting-door) (unlocked meeting-back-door) (unlocked office-door)
+         (unlocked office-back-door) (unlocked server-door)
+         (unlocked fire-door))
+  (:goal (and (at pr2 server-room))))

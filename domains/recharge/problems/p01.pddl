@@ -1,0 +1,12 @@
+; Carry the mail from the office to the lab; the charger is in the hallway.
+(define (problem deliver-mail)
+  (:domain recharge)
+  (:objects pr2 - robot office hallway lab kitchen - room mail - item)
+  (:init (at pr2 kitchen) (hand-empty pr2) (battery-ok pr2) (unplugged pr2)
+         (charger-at hallway)
+         (connected office hallway) (connected hallway office)
+         (connected hallway lab) (connected lab hallway)
+         (connected hallway kitchen) (connected kitchen hallway)
+         (connected kitchen lab) (connected lab kitchen)
+         (item-at mail office))
+  (:goal (and (item-at mail lab))))

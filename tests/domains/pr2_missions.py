@@ -1,0 +1,208 @@
+"""Harness of the fetch_drink, door_opening and recharge mission tests.
+
+It runs a mission planned (the executive with the domain's skills) or scripted (the
+domain's hand-written baseline) for one seed and fault rate, and summarises sweeps
+over seeds. Planner answers are memoised across runs (see :class:`MemoPlanner`).
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Iterable, Sequence
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from functools import cache
+from pathlib import Path
+from typing import Any
+
+from plan_bridge.domain import Fact, FactLike, PlanningTask, parse_fact
+from plan_bridge.executive import Executive
+from plan_bridge.mission import Target, load_target
+from plan_bridge.planning import Planner, PlanResult, PlanStatus
+
+REPO = Path(__file__).resolve().parents[2]
+DOMAINS = REPO / "domains"
+PLAN_BRIDGE = Path(sys.executable).parent / "plan-bridge"
+
+#: The outcomes a mission may end with; anything else (an exception, a hang) is a bug.
+DEFINED_OUTCOMES = ("succeeded", "aborted")
+
+
+class MemoPlanner:
+    """A planner that remembers its answers, keyed by everything a solve depends on.
+
+    Fast Downward is deterministic: the same task from the same initial state gets
+    the same plan. Runs of different seeds start from the same state and often
+    replan from the same beliefs, so memoising keeps 20-seed sweeps within the test
+    budget without changing a single decision of the executive.
+    """
+
+    def __init__(self, planner: Planner) -> None:
+        self.planner = planner
+        self._answers: dict[tuple[Any, ...], PlanResult] = {}
+        self._lock = threading.Lock()
+        self.solves = 0
+
+    @property
+    def name(self) -> str:
+        return self.planner.name
+
+    def solve(
+        self,
+        task: PlanningTask,
+        *,
+        timeout: float,
+        initial_state: Iterable[FactLike] | None = None,
+        goal: Iterable[FactLike] | None = None,
+    ) -> PlanResult:
+        facts: frozenset[Fact] = (
+            frozenset(parse_fact(f) for f in initial_state)
+            if initial_state is not None
+            else task.initial_facts
+        )
+        goals = frozenset(parse_fact(g) for g in goal) if goal is not None else None
+        key = (task.name, task.goal_facts, task.goal_is_conjunctive, facts, goals)
+        with self._lock:
+            known = self._answers.get(key)
+        if known is not None:
+            return known
+        if goals is None:
+            result = self.planner.solve(task, timeout=timeout, initial_state=facts)
+        else:
+            result = self.planner.solve(task, timeout=timeout, initial_state=facts, goal=goals)
+        self.solves += 1
+        if result.status in (PlanStatus.SOLVED, PlanStatus.UNSOLVABLE):
+            with self._lock:
+                self._answers[key] = result
+        return result
+
+
+@cache
+def target(name: str, problem: str | None = None) -> Target:
+    return load_target(DOMAINS / name, problem)
+
+
+@dataclass(frozen=True)
+class Run:
+    """One mission run."""
+
+    mode: str
+    seed: int
+    outcome: str
+    goal_reached: bool
+    faults: int
+    sim_time: float
+    wall_s: float
+    planner_calls: int = 0
+    executed: tuple[str, ...] = ()
+    fault_log: tuple[tuple[float, str, str, str], ...] = ()
+
+
+def run_planned(mission: Target, seed: int, fail_rate: float, planner: Planner) -> Run:
+    started = time.monotonic()
+    setup = mission.setup(seed=seed, fail_rate=fail_rate)
+    executive = Executive(mission.task, setup.skills, planner, sense=setup.sense)
+    outcome = executive.execute() or ""
+    world = setup.world
+    return Run(
+        "planned",
+        seed,
+        outcome,
+        world.goal_reached(),
+        world.faults_injected,
+        world.sim_time,
+        time.monotonic() - started,
+        executive.report.planner_calls,
+        tuple(executive.report.executed),
+        tuple((f.time, f.kind, f.action, f.detail) for f in world.faults),
+    )
+
+
+def run_scripted(mission: Target, seed: int, fail_rate: float) -> Run:
+    started = time.monotonic()
+    assert mission.module is not None
+    baseline = mission.module.scripted(mission.task, seed=seed, fail_rate=fail_rate)
+    outcome = baseline.machine.execute() or ""
+    world = baseline.world
+    return Run(
+        "scripted",
+        seed,
+        outcome,
+        world.goal_reached(),
+        world.faults_injected,
+        world.sim_time,
+        time.monotonic() - started,
+        fault_log=tuple((f.time, f.kind, f.action, f.detail) for f in world.faults),
+    )
+
+
+def sweep_planned(
+    mission: Target, seeds: Iterable[int], fail_rate: float, planner: Planner
+) -> list[Run]:
+    """Planned runs of ``seeds``, two at a time (one per planner worker on two cores).
+
+    Runs share nothing but the planner, whose answers do not depend on timing, so
+    the results are the same as one by one; they come back in seed order.
+    """
+    with ThreadPoolExecutor(max_workers=2, thread_name_prefix="mission") as pool:
+        return list(pool.map(lambda seed: run_planned(mission, seed, fail_rate, planner), seeds))
+
+
+def success_rate(runs: Sequence[Run]) -> float:
+    return sum(r.goal_reached for r in runs) / len(runs)
+
+
+def summary(label: str, runs: Sequence[Run]) -> str:
+    """``fetch_drink p01 planned fail 0.1: 20/20 goals (100%), ...`` for the test log."""
+    reached = sum(r.goal_reached for r in runs)
+    mean_sim = sum(r.sim_time for r in runs) / len(runs)
+    mean_wall = sum(r.wall_s for r in runs) / len(runs)
+    faults = sum(r.faults for r in runs) / len(runs)
+    return (
+        f"{label}: {reached}/{len(runs)} goals ({reached / len(runs):.0%}), "
+        f"{faults:.1f} faults/run, simulated {mean_sim:.0f} s/run, wall {mean_wall:.2f} s/run"
+    )
+
+
+def plan_bridge(
+    *commands: Sequence[str], timeout: float = 90.0
+) -> list[subprocess.CompletedProcess[str]]:
+    """Run ``plan-bridge`` commands of this environment side by side (they are slow
+    to start: each imports unified-planning and starts a planner worker)."""
+    started = [
+        (
+            command,
+            subprocess.Popen(
+                [str(PLAN_BRIDGE), *command],
+                stdout=subprocess.PIPE,
+                stderr=subprocess.PIPE,
+                text=True,
+                cwd=REPO,
+            ),
+        )
+        for command in commands
+    ]
+    results = []
+    for command, process in started:
+        try:
+            out, err = process.communicate(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            out, err = process.communicate()
+        results.append(subprocess.CompletedProcess(command, process.returncode, out, err))
+    return results
+
+
+def load_generator(name: str) -> Any:
+    """Import ``domains/<name>/generate.py`` as a module."""
+    import importlib.util
+
+    path = DOMAINS / name / "generate.py"
+    spec = importlib.util.spec_from_file_location(f"{name}_generate", path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
