@@ -17,6 +17,7 @@ It stops early when the goal already holds. Every decision is an
 
 from __future__ import annotations
 
+import bisect
 import dataclasses
 import threading
 import time
@@ -93,6 +94,7 @@ class ExecutionReport:
     retries: int = 0
     continues: int = 0
     repairs: int = 0
+    repair_attempts: int = 0
     replans: int = 0
     planner_calls: int = 0
     planning_time_s: float = 0.0
@@ -149,6 +151,7 @@ class Executive(smach.Container):
         self._checkpoint_lock = threading.Lock()
         self._plan_in_force: list[PlanStep] = []
         self._first_in_force = 1
+        self._executed: list[tuple[int, str]] = []
         self.task = task
         self.skills = skills
         self.planner = get_planner(planner) if isinstance(planner, str) else planner
@@ -241,17 +244,18 @@ class Executive(smach.Container):
     def _mission(self) -> str:
         resume, self._resume = self._resume, None
         if resume is not None:
-            plan, first_index = self._restore(resume)
+            plan, self._next_label = self._restore(resume)
         self._sense()
         if self.model.goal_holds(self.belief.facts):
             self._decide("done", "the goal already holds")
             return "succeeded"
         if resume is None:
             plan = self._plan("initial plan", self.task)
-            first_index = 1
         while True:
             self._check_preempt()
-            outcome, failed = self._run_plan(plan, first_index)
+            first = self._next_label
+            outcome, failed = self._run_plan(plan, first)
+            self._next_label = max(self._records, default=first - 1) + 1
             if outcome == "preempted":
                 self._decide("stop", "preempted")
                 return "preempted"
@@ -262,18 +266,19 @@ class Executive(smach.Container):
                 reason = "the plan finished but the goal does not hold: " + ", ".join(
                     self.model.unmet_goals(self.belief.facts)
                 )
-                failed = len(plan)
+                rest: list[PlanStep] = []
+                record = None
             else:
-                record = self._records.get(first_index + failed)
+                record = self._records.get(first + failed)
                 reason = self._failure_reason(plan[failed], record)
-            # Steps after the failed one may have succeeded already (concurrent layers).
-            rest = [
-                step
-                for i, step in enumerate(plan[failed:], start=first_index + failed)
-                if i == first_index + failed or not self._succeeded(i)
-            ]
-            first_index += failed
-            plan = self._recover(rest, reason, first_index)
+                # The failed step first, then every other step not done yet (with
+                # concurrent layers, later steps may be done and same-layer ones not).
+                rest = [plan[failed]] + [
+                    step
+                    for i, step in enumerate(plan)
+                    if i != failed and not self._succeeded(first + i)
+                ]
+            plan = self._recover(rest, reason, record)
 
     def _run_plan(self, plan: list[PlanStep], first_index: int) -> tuple[str, int | None]:
         """Run ``plan``; return (outcome, index in ``plan`` of the first unfinished step)."""
@@ -307,11 +312,16 @@ class Executive(smach.Container):
             return "preempted", None
         if outcome == "succeeded":
             return "succeeded", None
-        for i in range(len(plan)):
-            record = self._records.get(first_index + i)
-            if record is None or record.outcome != "succeeded":
-                return outcome or "aborted", i
-        return outcome or "aborted", None
+        unfinished = [i for i in range(len(plan)) if not self._succeeded(first_index + i)]
+        failed = [
+            i
+            for i in unfinished
+            if first_index + i in self._records
+            and self._records[first_index + i].outcome in ("aborted", "invalid")
+        ]
+        if failed:
+            return outcome or "aborted", failed[0]
+        return outcome or "aborted", unfinished[0] if unfinished else None
 
     def _succeeded(self, index: int) -> bool:
         record = self._records.get(index)
@@ -324,7 +334,9 @@ class Executive(smach.Container):
             if record.outcome != "invalid":
                 report.actions_executed += 1
             if record.outcome == "succeeded":
-                report.executed.append(str(record.step))
+                # In plan order (labels only grow), whatever order concurrent steps end in.
+                bisect.insort(self._executed, (record.index, str(record.step)))
+                report.executed = [step for _, step in self._executed]
             elif record.outcome in ("aborted", "invalid"):
                 report.actions_failed += 1
             if record.outcome == "succeeded" and self.checkpoint is not None:
@@ -376,6 +388,9 @@ class Executive(smach.Container):
         ):
             setattr(report, name, saved.get(name, 0))
         report.executed = list(saved.get("executed", []))
+        self._executed = [
+            (-len(report.executed) + i, step) for i, step in enumerate(report.executed)
+        ]
         report.decisions = list(saved.get("decisions", []))
         for key, value in snapshot.get("userdata", {}).items():
             self.userdata[key] = value
@@ -401,14 +416,16 @@ class Executive(smach.Container):
         return f"{step} {record.outcome}{detail}{seen}"
 
     # -- recovery ----------------------------------------------------------------------------
-    def _recover(self, rest: list[PlanStep], reason: str, first_index: int) -> list[PlanStep]:
+    def _recover(
+        self, rest: list[PlanStep], reason: str, record: StepRecord | None
+    ) -> list[PlanStep]:
         """Choose how to go on from a failure of ``rest[0]`` (or the end of the plan)."""
         policy = self.policy
         facts = self.belief.facts
         if rest:
             failed = rest[0]
-            record = self._records.get(first_index)
-            key = (first_index, str(failed))
+            # Retries are counted per step of the plan in force (a new plan starts over).
+            key = (self._generation, str(failed))
             tries = self._retry_counts.get(key, 0)
             ground = self.model.ground(failed)
             if (
@@ -436,6 +453,7 @@ class Executive(smach.Container):
         if policy.replan:
             self.report.replans += 1
             self._decide("replan", reason)
+            self._generation += 1
             return self._plan(f"replan: {reason}", self.task)
         raise _Stop("aborted", f"{reason}; the policy allows no further recovery")
 
@@ -448,6 +466,13 @@ class Executive(smach.Container):
         missing = needed - facts
         if not missing:
             return None
+        fixed = sorted(f for f in missing if f[0] not in self.model.addable_predicates())
+        if fixed:
+            # No action makes these true (they are observed, like a locked door): the
+            # old plan cannot be rescued, and asking the planner would only cost time.
+            self._decide("repair-skipped", f"no action can re-establish {_show(fixed)}")
+            return None
+        self.report.repair_attempts += 1
         # The goal atoms travel to the planner, which derives the repair problem from
         # the task it already parsed (no PDDL is written or parsed).
         prefix = self._plan(
@@ -466,6 +491,8 @@ class Executive(smach.Container):
             )
         else:
             self.report.repairs += 1
+            self._budgeted_calls += 1
+            self._generation += 1
             self._decide("repair", f"{reason}; {len(prefix)} steps re-establish {_show(missing)}")
             return candidate
         self._decide("repair-rejected", why)
@@ -483,7 +510,7 @@ class Executive(smach.Container):
         """Plan from the belief; raise _Stop when the budget or the planner says no."""
         policy = self.policy
         report = self.report
-        if report.planner_calls > policy.max_replans:
+        if final and self._budgeted_calls > policy.max_replans:
             raise _Stop(
                 "aborted",
                 f"replanning budget exhausted ({policy.max_replans} replans) after: {reason}",
@@ -496,6 +523,10 @@ class Executive(smach.Container):
         timeout = min(policy.planner_timeout, remaining)
         result = self._solve(task, timeout, goal)
         report.planner_calls += 1
+        if final:
+            # Repair attempts are bounded by the failures and the time budget; only
+            # plans that replace the plan in force use up the replanning budget.
+            self._budgeted_calls += 1
         report.planning_time_s += result.planning_time_s
         if self._observed():
             t, thread = stamp()
@@ -578,6 +609,11 @@ class Executive(smach.Container):
     def _begin(self, parent_ud: smach.UserData | None) -> None:
         super()._begin(parent_ud)
         self._retry_counts: dict[tuple[int, str], int] = {}
+        # Plans adopted so far (retries are counted per plan) and the next step label.
+        self._generation = 0
+        self._next_label = 1
+        self._executed = []
+        self._budgeted_calls = 0
 
 
 def _json_values(ud: smach.UserData) -> dict[str, Any]:

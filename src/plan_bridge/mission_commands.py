@@ -295,6 +295,8 @@ def _run_mission(args: argparse.Namespace, started: float) -> int:
         }
         if faults is not None:
             data["faults_injected"] = faults
+        if hasattr(world, "sim_time"):
+            data["sim_time_s"] = round(float(world.sim_time), 3)
         print(json.dumps(data, indent=None))
     if not args.quiet:
         print(_summary(outcome, report, faults), file=out, flush=True)
@@ -306,7 +308,8 @@ def _summary(outcome: str | None, report: Any, faults: int | None) -> str:
     return (
         f"summary: {outcome}{' (goal reached)' if report.goal_reached else ' (goal NOT reached)'}; "
         f"{report.actions_executed} actions ({report.actions_failed} failed){fault_text}; "
-        f"{report.retries} retries, {report.continues} continues, {report.repairs} repairs, "
+        f"{report.retries} retries, {report.continues} continues, "
+        f"{report.repairs} repairs ({report.repair_attempts} tried), "
         f"{report.replans} replans; {report.planner_calls} planner calls, "
         f"planning {report.planning_time_s:.2f} s, execution {report.execution_time_s:.2f} s, "
         f"total {report.total_time_s:.2f} s"

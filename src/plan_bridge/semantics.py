@@ -145,6 +145,7 @@ class _Compiler:
 class _Effect:
     atom: Callable[[Binding], Fact]
     add: bool
+    predicate: str
     condition: Condition | None
     forall: tuple[tuple[str, tuple[str, ...]], ...]
 
@@ -288,7 +289,13 @@ class ActionModel:
             condition = c.condition(effect.condition) if effect.is_conditional() else None
             forall = tuple((v.name, c.objects(v.type)) for v in effect.forall)
             effects.append(
-                _Effect(c.atom(effect.fluent), bool(value.bool_constant_value()), condition, forall)
+                _Effect(
+                    c.atom(effect.fluent),
+                    bool(value.bool_constant_value()),
+                    effect.fluent.fluent().name.lower(),
+                    condition,
+                    forall,
+                )
             )
         lifted = _LiftedAction(
             name=name,
@@ -314,6 +321,16 @@ class ActionModel:
             ground = GroundAction(step, lifted, binding)
             self._ground[key] = ground
         return ground
+
+    def addable_predicates(self) -> frozenset[str]:
+        """Predicates some action can make true (others can only be observed)."""
+        cached = getattr(self, "_addable", None)
+        if cached is None:
+            cached = frozenset(
+                e.predicate for name in self.task.actions for e in self._lift(name).effects if e.add
+            )
+            self._addable = cached
+        return cached
 
     def goal_holds(self, facts: Facts) -> bool:
         return self.unmet_goals(facts) == []

@@ -71,9 +71,12 @@ class SimulatedWorld:
     def faults_injected(self) -> int:
         return len(self.faults)
 
-    def inject(self, kind: str, action: str, detail: str = "") -> Fault:
-        """Record a fault (call it where the world decides one happens)."""
-        fault = Fault(self.sim_time, kind, action, detail)
+    def inject(self, kind: str, action: str, detail: str = "", time: float | None = None) -> Fault:
+        """Record a fault (call it where the world decides one happens).
+
+        ``time`` defaults to :attr:`sim_time`; worlds with a clock per robot pass theirs.
+        """
+        fault = Fault(self.sim_time if time is None else time, kind, action, detail)
         self.faults.append(fault)
         return fault
 
