@@ -129,9 +129,11 @@ class ReturnToStart(smach.State):
         return "returned"
 
 
-def scripted(task: PlanningTask, *, seed: int, fail_rate: float) -> ScriptedMission:
+def scripted(
+    task: PlanningTask, *, seed: int, fail_rate: float, variant: str = ""
+) -> ScriptedMission:
     """The whole mission as one hand-written machine acting on a fresh world."""
-    world = DoorWorld(task, seed=seed, fail_rate=fail_rate)
+    world = DoorWorld(task, seed=seed, fail_rate=fail_rate, variant=variant)
     robot = next(f[1] for f in task.initial_facts if f[0] == "at")
     goal = world.goal_rooms[0]
     route = route_through(world, world.start, goal)

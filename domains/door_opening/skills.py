@@ -293,7 +293,7 @@ def build_skills(world: DoorWorld) -> SkillRegistry:
     return skills
 
 
-def setup(task: PlanningTask, *, seed: int, fail_rate: float) -> MissionSetup:
+def setup(task: PlanningTask, *, seed: int, fail_rate: float, variant: str = "") -> MissionSetup:
     """The mission protocol of plan_bridge: skills acting on a fresh simulated world."""
-    world = DoorWorld(task, seed=seed, fail_rate=fail_rate)
+    world = DoorWorld(task, seed=seed, fail_rate=fail_rate, variant=variant)
     return MissionSetup(skills=build_skills(world), world=world)

@@ -33,13 +33,21 @@ FAULT_SCALE = {
     "door-swung": 1.0,
 }
 
+#: World variants for studies: "unanticipated" also locks a door on the shortest route
+#: AND one on the detour the scripted author hard-coded (the goal stays reachable).
+VARIANTS = ("", "unanticipated")
+
 ROOM_CROSSING = 8.0  # s to cross a room to the next door or passage
 
 
 class DoorWorld(SimulatedWorld):
     """Rooms joined by doors and passages; some doors are really locked."""
 
-    def __init__(self, task: PlanningTask, *, seed: int | None = 0, fail_rate: float = 0.0) -> None:
+    def __init__(
+        self, task: PlanningTask, *, seed: int | None = 0, fail_rate: float = 0.0, variant: str = ""
+    ) -> None:
+        if variant not in VARIANTS:
+            raise ValueError(f"unknown variant {variant!r}; variants: {', '.join(VARIANTS)}")
         super().__init__(task, seed=seed, fail_rate=fail_rate)
         facts = task.initial_facts
         self.doors: dict[str, tuple[str, str]] = {}
@@ -51,6 +59,8 @@ class DoorWorld(SimulatedWorld):
         self.goal_rooms = [g[2] for g in task.goal_facts if g[0] == "at"]
         self.locked: set[str] = set()
         self._lock_doors()
+        if variant == "unanticipated":
+            self._lock_route_and_detour()
 
     def fault(self, kind: str) -> bool:
         """Draw whether a fault of ``kind`` happens now (always False at fail_rate 0)."""
@@ -69,6 +79,41 @@ class DoorWorld(SimulatedWorld):
             self.locked.add(door)
             self._facts.discard(("unlocked", door))
             self.inject("door-locked", "setup", f"{door} is locked")
+
+    def route(self, avoid_doors: set[str]) -> list[str] | None:
+        """Doors on the route with the fewest joints to the first goal room, or None."""
+        goal = self.goal_rooms[0]
+        previous: dict[str, tuple[str, str | None] | None] = {self.start: None}
+        queue = deque([self.start])
+        while queue:
+            here = queue.popleft()
+            if here == goal:
+                doors = []
+                while (step := previous[here]) is not None:
+                    here, door = step
+                    if door:
+                        doors.append(door)
+                return doors[::-1]
+            for there, door in self.exits(here, avoid_doors):
+                if there not in previous:
+                    previous[there] = (here, door)
+                    queue.append(there)
+        return None
+
+    def _lock_route_and_detour(self) -> None:
+        """A second locked door, on the detour too: what the scripted author did not expect."""
+        route = self.route(set()) or []
+        detour = self.route(set(route)) or []
+        for doors in (route, detour):
+            for door in reversed(doors):
+                trial = self.locked | {door}
+                if door not in self.locked and all(
+                    self.reachable(self.start, g, trial) for g in self.goal_rooms
+                ):
+                    self.locked.add(door)
+                    self._facts.discard(("unlocked", door))
+                    self.inject("door-locked", "setup", f"{door} is locked (unanticipated)")
+                    break
 
     def reachable(self, start: str, goal: str, locked: set[str]) -> bool:
         seen = {start}

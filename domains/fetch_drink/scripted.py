@@ -175,9 +175,11 @@ class ScanShelves(smach.State):
         return "found"
 
 
-def scripted(task: PlanningTask, *, seed: int, fail_rate: float) -> ScriptedMission:
+def scripted(
+    task: PlanningTask, *, seed: int, fail_rate: float, variant: str = ""
+) -> ScriptedMission:
     """The whole mission as one hand-written machine acting on a fresh world."""
-    world = FetchDrinkWorld(task, seed=seed, fail_rate=fail_rate)
+    world = FetchDrinkWorld(task, seed=seed, fail_rate=fail_rate, variant=variant)
     believed = task.initial_facts
     robot = next(f[1] for f in believed if f[0] == "at")
     fridge, kitchen = next((f[1], f[2]) for f in believed if f[0] == "fridge-in")

@@ -220,7 +220,13 @@ class FindPerson(smach.State):
     def execute(self, ud: smach.UserData) -> str:
         self.world.wait(2.0)
         present = self.world.holds("person-at", ud.person, ud.place)
-        ud.observations = {**ud.observations, fact("person-at", ud.person, ud.place): present}
+        seen = {fact("person-at", ud.person, ud.place): present}
+        if not present:
+            # Not here: call the person and ask where they are, so a new plan can go there.
+            actual = self.world.where_is(ud.person)
+            if actual is not None:
+                seen[fact("person-at", ud.person, actual)] = True
+        ud.observations = {**ud.observations, **seen}
         return "found" if present else "absent"
 
 
@@ -425,7 +431,7 @@ def build_skills(world: FetchDrinkWorld) -> SkillRegistry:
     return skills
 
 
-def setup(task: PlanningTask, *, seed: int, fail_rate: float) -> MissionSetup:
+def setup(task: PlanningTask, *, seed: int, fail_rate: float, variant: str = "") -> MissionSetup:
     """The mission protocol of plan_bridge: skills acting on a fresh simulated world."""
-    world = FetchDrinkWorld(task, seed=seed, fail_rate=fail_rate)
+    world = FetchDrinkWorld(task, seed=seed, fail_rate=fail_rate, variant=variant)
     return MissionSetup(skills=build_skills(world), world=world)

@@ -46,6 +46,11 @@ FAULT_SCALE = {
     "door-rebound": 1.0,
 }
 
+#: World variants for studies: "unanticipated" moves every person to another room
+#: before the robot arrives (nobody told the robot, and the scripted author did not
+#: foresee it).
+VARIANTS = ("", "unanticipated")
+
 DRIVE_SPEED = 0.6  # m/s, the PR2's indoor cruising speed
 CONGESTION_WAIT = 5.0  # s a person standing in a corridor takes to move on
 
@@ -53,7 +58,11 @@ CONGESTION_WAIT = 5.0  # s a person standing in a corridor takes to move on
 class FetchDrinkWorld(SimulatedWorld):
     """A home with a fridge: places joined by corridors, drinks on shelves."""
 
-    def __init__(self, task: PlanningTask, *, seed: int | None = 0, fail_rate: float = 0.0) -> None:
+    def __init__(
+        self, task: PlanningTask, *, seed: int | None = 0, fail_rate: float = 0.0, variant: str = ""
+    ) -> None:
+        if variant not in VARIANTS:
+            raise ValueError(f"unknown variant {variant!r}; variants: {', '.join(VARIANTS)}")
         super().__init__(task, seed=seed, fail_rate=fail_rate)
         self.corridors: dict[Corridor, float] = {}
         for fact in task.initial_facts:
@@ -62,6 +71,8 @@ class FetchDrinkWorld(SimulatedWorld):
         self.blocked: set[Corridor] = set()
         self._misplace_drinks()
         self._block_corridors()
+        if variant == "unanticipated":
+            self._move_people()
 
     # -- faults decided when the world is made ------------------------------------------
     def fault(self, kind: str) -> bool:
@@ -90,6 +101,22 @@ class FetchDrinkWorld(SimulatedWorld):
             a, b = sorted(corridor)
             self._facts -= {("clear", a, b), ("clear", b, a)}
             self.inject("corridor-blocked", "setup", f"a box blocks the corridor {a} - {b}")
+
+    def _move_people(self) -> None:
+        kitchens = {f[2] for f in self._facts if f[0] == "fridge-in"}
+        for fact in sorted(f for f in self._facts if f[0] == "person-at"):
+            person, place = fact[1], fact[2]
+            elsewhere = sorted(p for p in self.neighbours(place) if p not in kitchens)
+            if not elsewhere:
+                continue
+            moved = self.rng.choice(elsewhere)
+            self._facts.discard(fact)
+            self._facts.add(("person-at", person, moved))
+            self.inject("person-moved", "setup", f"{person} went from {place} to {moved}")
+
+    def where_is(self, person: str) -> str | None:
+        """Where ``person`` really is (they answer when the robot calls them)."""
+        return next((f[2] for f in self._facts if f[0] == "person-at" and f[1] == person), None)
 
     def _connected_without(self, blocked: set[Corridor]) -> bool:
         places = {p for c in self.corridors for p in c}
