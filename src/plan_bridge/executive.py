@@ -633,18 +633,3 @@ def _json_values(ud: smach.UserData) -> dict[str, Any]:
 def _show(facts: Iterable[Fact]) -> str:
     shown = sorted(format_fact(f) for f in facts)
     return ", ".join(shown[:6]) + (f" and {len(shown) - 6} more" if len(shown) > 6 else "")
-
-
-def _with_goal(task: PlanningTask, goal: Iterable[Fact]) -> PlanningTask:
-    """A copy of ``task`` whose goal is the conjunction of ``goal``."""
-    problem = task.problem.clone()
-    problem.clear_goals()
-    atoms = sorted(goal)
-    for atom in atoms:
-        fluent = problem.fluent(atom[0])
-        problem.add_goal(fluent(*(problem.object(a) for a in atom[1:])))
-    # problem_text=None: the planner must write this changed problem, not resend the
-    # original file's text.
-    return dataclasses.replace(
-        task, problem=problem, goal_facts=tuple(atoms), goal_is_conjunctive=True, problem_text=None
-    )

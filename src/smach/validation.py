@@ -13,8 +13,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Literal
 
-import networkx as nx
-
 if TYPE_CHECKING:
     from smach.container import Container
     from smach.state import State
@@ -98,6 +96,9 @@ def _available(container: Container) -> set[str]:
 
 
 def _check_graph(sm: Container, report: ValidationReport) -> None:
+    # networkx costs 0.1-0.3 s to import: only validation needs it, so import it here.
+    import networkx as nx
+
     from smach.state_machine import StateMachine
 
     assert isinstance(sm, StateMachine)

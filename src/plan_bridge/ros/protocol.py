@@ -23,22 +23,27 @@ package needs the ROS build toolchain. So one skill is three calls, all under
 
 ``perform`` (``BasicTypes``: PDDL text in, JSON result out) does all three in one
 blocking call, for the service transport; ``facts`` (``std_srvs/Trigger``) returns
-the JSON list of the facts true in the simulated world. Payloads are text and JSON:
+the JSON list of the facts true in the simulated world; ``info`` (``Trigger``) returns
+a JSON object describing the robot node (see :func:`task_digest` and
+``SkillServer.info``). A robot node that runs a domain's own skills (a domain folder)
+streams feedback ``sequence = [states entered so far]`` instead of a percentage. Payloads are text and JSON:
 parsed, bounded and validated, never evaluated.
 """
 
 from __future__ import annotations
 
+import hashlib
 import importlib
 import json
 import re
 from collections.abc import Iterable
 from typing import Any
 
-from plan_bridge.domain import Fact, format_fact, parse_fact
+from plan_bridge.domain import Fact, PlanningTask, format_fact, parse_fact
 
 __all__ = [
     "FACTS_SERVICE",
+    "INFO_SERVICE",
     "MAX_PAYLOAD",
     "PERFORM_SERVICE",
     "REPORT_SERVICE",
@@ -47,6 +52,7 @@ __all__ = [
     "decode_result",
     "encode_result",
     "interfaces",
+    "task_digest",
 ]
 
 #: Service names below the prefix.
@@ -54,6 +60,7 @@ SUBMIT_SERVICE = "submit"
 REPORT_SERVICE = "report"
 PERFORM_SERVICE = "perform"
 FACTS_SERVICE = "facts"
+INFO_SERVICE = "info"
 #: Largest result payload a client accepts (bytes of JSON).
 MAX_PAYLOAD = 1_000_000
 
@@ -102,6 +109,21 @@ def decode_result(text: str) -> tuple[str, list[tuple[Fact, bool]], str]:
         observations.append((parse_fact(item[0]), item[1]))
     detail = data.get("detail", "")
     return outcome, observations, str(detail)[:1000]
+
+
+def task_digest(task: PlanningTask) -> str:
+    """A short fingerprint of a task's objects, initial state, goal and actions.
+
+    The executive compares it with the robot node's (``info``) so that both sides
+    are sure to run the same problem.
+    """
+    data = {
+        "objects": sorted(task.objects.items()),
+        "init": sorted(format_fact(f) for f in task.initial_facts),
+        "goal": sorted(format_fact(f) for f in task.goal_facts),
+        "actions": sorted(task.actions),
+    }
+    return hashlib.sha256(json.dumps(data).encode()).hexdigest()[:16]
 
 
 def interfaces() -> tuple[Any, Any, Any]:

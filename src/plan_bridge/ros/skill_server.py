@@ -1,42 +1,66 @@
-"""A simulated robot: serves every action of a PDDL domain as a ROS 2 action.
+"""A simulated robot node: serves a domain's actions as ROS 2 actions and services.
 
 Run it as a process (the executive runs elsewhere, on this host or another)::
 
+    python -m plan_bridge.ros.skill_server domains/fetch_drink --problem p01 --seed 1 --fail-rate 0.1
     python -m plan_bridge.ros.skill_server DOMAIN.pddl PROBLEM.pddl --seed 1 --fail-rate 0.2
 
-Each action takes ``--action-time`` seconds of wall time (feedback every tenth of
-it, cancellable throughout), then is performed in a
-:class:`~plan_bridge.simulation.SimulatedWorld`, which fails it with probability
-``--fail-rate`` (seeded). The wire format is in :mod:`plan_bridge.ros.protocol`.
-The process prints ``ready`` once serving and one line per goal event
-(``goal``, ``succeeded``, ``failed``, ``canceled``, followed by the action), which
-tests and humans can follow. SIGINT or SIGTERM end it.
+**A domain folder** with Python (``setup()``, see :mod:`plan_bridge.mission`): the
+robot builds the domain's :class:`~plan_bridge.mission.MissionSetup` (its real
+simulated world, ``world.py``, with its faults) and, for each goal, executes the
+domain's own hand-written skill state machine for that action against that world,
+here, in the robot process. Feedback counts the skill's states as they are entered;
+the result carries the skill's outcome and observations. The world's clock is paced
+in wall time (``--time-scale`` wall seconds per simulated second,
+:mod:`plan_bridge.ros.pacing`); a cancel preempts the skill machine and stops the
+motion in progress (which then has no effect).
+
+**A bare domain.pddl, or a folder without Python:** every action is performed
+symbolically in a :class:`~plan_bridge.simulation.SimulatedWorld` after
+``--action-time`` seconds of wall time (feedback every tenth of it, cancellable
+throughout), failing with probability ``--fail-rate`` (seeded).
+
+The wire format is in :mod:`plan_bridge.ros.protocol`. The process prints
+``ready`` once serving and one line per goal event (``goal``, ``succeeded``,
+``failed``, ``canceled``, followed by the action; ``state PATH`` for each state a
+domain skill enters), which tests and humans can follow. SIGINT or SIGTERM end it.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
+import os
 import signal
 import sys
+import tempfile
 import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from pathlib import Path
 from typing import Any
 
-from plan_bridge.domain import PlanningTask, load_task, parse_fact
-from plan_bridge.errors import FactError
+import smach
+from plan_bridge.domain import PlanningTask, parse_fact
+from plan_bridge.errors import FactError, PlanBridgeError
 from plan_bridge.planning import PlanStep
+from plan_bridge.ros.pacing import Pacer, Run, pace
 from plan_bridge.ros.protocol import (
     FACTS_SERVICE,
+    INFO_SERVICE,
     PERFORM_SERVICE,
     REPORT_SERVICE,
     SUBMIT_SERVICE,
     action_topic,
     encode_result,
     interfaces,
+    task_digest,
 )
 from plan_bridge.simulation import SimulatedWorld
+from plan_bridge.skills import SkillError, SkillRegistry
+from plan_bridge.world import normalise_observations
+from smach.introspection.events import Event, StateEntered
 from smach.ros._api import (
     ActionServer,
     CancelResponse,
@@ -47,14 +71,34 @@ from smach.ros._api import (
     rclpy,
 )
 
-__all__ = ["SkillServer", "main"]
+__all__ = ["SHORT_LEASE_PROFILE", "SkillServer", "main"]
+
+#: Fast DDS participant profile with a short lease: when the robot process dies
+#: (SIGKILL, crash, power loss), it leaves the ROS graph after ``{lease}`` seconds
+#: instead of Fast DDS's default 20 s, so executives notice within that time.
+SHORT_LEASE_PROFILE = """<?xml version="1.0" encoding="UTF-8" ?>
+<dds xmlns="http://www.eprosima.com"><profiles>
+  <participant profile_name="plan_bridge_robot_lease" is_default_profile="true"><rtps><builtin>
+    <discovery_config>
+      <leaseDuration><sec>{sec}</sec><nanosec>{nanosec}</nanosec></leaseDuration>
+      <leaseAnnouncement><sec>{asec}</sec><nanosec>{ananosec}</nanosec></leaseAnnouncement>
+    </discovery_config>
+  </builtin></rtps></participant>
+</profiles></dds>
+"""
 
 
 class SkillServer:
     """Serves ``world``'s task actions on ``node`` under ``prefix``.
 
-    The caller spins ``node`` (a multi-threaded executor: goals block their thread
-    for ``action_time``). ``log`` receives one line per goal event.
+    Without ``skills``, each action is performed symbolically by ``world.perform``
+    after ``action_time`` seconds. With ``skills`` (a domain's registry acting on
+    ``world``), each goal executes the skill's state machine in the goal's thread;
+    ``pacer`` (see :func:`~plan_bridge.ros.pacing.pace`) lets a cancel stop the
+    motion in progress. Goals run one at a time (one robot) unless ``concurrent``.
+
+    The caller spins ``node`` (a multi-threaded executor: goals block their thread).
+    ``log`` receives one line per goal event. ``meta`` is added to :meth:`info`.
     """
 
     #: Tickets kept (oldest are forgotten beyond this).
@@ -68,6 +112,10 @@ class SkillServer:
         prefix: str = "skills",
         action_time: float = 0.2,
         log: Callable[[str], None] | None = None,
+        skills: SkillRegistry | None = None,
+        pacer: Pacer | None = None,
+        concurrent: bool = False,
+        meta: Mapping[str, Any] | None = None,
     ) -> None:
         fibonacci, basic_types, trigger = interfaces()
         self._fibonacci = fibonacci
@@ -76,14 +124,20 @@ class SkillServer:
         self.task: PlanningTask = world.task
         self.prefix = prefix.rstrip("/")
         self.action_time = action_time
+        self.skills = skills
+        self.pacer = pacer
+        self.concurrent = concurrent
+        self.meta = dict(meta or {})
         self._log = log or (lambda line: None)
         self._group = ReentrantCallbackGroup()
-        # One robot: actions run one at a time.
+        # One robot: actions run one at a time (unless the domain runs several robots).
         self._robot = threading.Lock()
         self._lock = threading.Lock()
         self._tickets: dict[int, PlanStep] = {}
         self._reports: dict[int, str] = {}
         self._next_ticket = 1
+        # Goals being executed: goal id -> (run, skill state once built, step).
+        self._runs: dict[bytes, tuple[Run, smach.State | None, PlanStep]] = {}
         self._servers: list[Any] = []
         for name in sorted(self.task.actions):
             self._servers.append(
@@ -93,7 +147,7 @@ class SkillServer:
                     action_topic(self.prefix, name),
                     execute_callback=lambda handle, name=name: self._execute(name, handle),
                     goal_callback=lambda goal, name=name: self._on_goal(name, goal),
-                    cancel_callback=lambda handle: CancelResponse.ACCEPT,
+                    cancel_callback=self._on_cancel,
                     callback_group=self._group,
                 )
             )
@@ -107,14 +161,39 @@ class SkillServer:
                 (PERFORM_SERVICE, self._on_perform),
             )
         ]
-        self._services.append(
-            node.create_service(
-                trigger,
-                f"{self.prefix}/{FACTS_SERVICE}",
-                self._on_facts,
-                callback_group=self._group,
+        for name, callback in ((FACTS_SERVICE, self._on_facts), (INFO_SERVICE, self._on_info)):
+            self._services.append(
+                node.create_service(
+                    trigger, f"{self.prefix}/{name}", callback, callback_group=self._group
+                )
             )
-        )
+
+    @property
+    def mode(self) -> str:
+        return "symbolic" if self.skills is None else "domain skills"
+
+    def info(self) -> dict[str, Any]:
+        """What the ``info`` service answers: who this robot is and how its world is."""
+        with self._lock:
+            busy = sorted(str(step) for _, _, step in self._runs.values())
+        world = self.world
+        faults = list(getattr(world, "faults", []))
+        return {
+            **self.meta,
+            "node": self.node.get_fully_qualified_name(),
+            "prefix": self.prefix,
+            "pid": os.getpid(),
+            "mode": self.mode,
+            "task": self.task.name,
+            "digest": task_digest(self.task),
+            "concurrent": self.concurrent,
+            "busy": busy,
+            "sim_time": round(float(getattr(world, "sim_time", 0.0)), 3),
+            "actions_run": int(getattr(world, "actions_run", 0)),
+            "faults_injected": len(faults),
+            "faults": [f"{f.kind}: {f.detail}" for f in faults[-50:]],
+            "goal_reached": bool(world.goal_reached()),
+        }
 
     # -- parsing ------------------------------------------------------------------------------
     def step_of(self, text: str) -> PlanStep:
@@ -134,6 +213,14 @@ class SkillServer:
     def _ticket(self, ticket: int) -> PlanStep | None:
         with self._lock:
             return self._tickets.get(ticket)
+
+    @contextlib.contextmanager
+    def _the_robot(self) -> Iterator[None]:
+        if self.concurrent:
+            yield
+        else:
+            with self._robot:
+                yield
 
     # -- services ---------------------------------------------------------------------------------
     def _on_submit(self, request: Any, response: Any) -> Any:
@@ -170,17 +257,27 @@ class SkillServer:
             response.string_value = encode_result(False, [], str(exc))
             return response
         self._log(f"goal {step}")
-        with self._robot:
-            time.sleep(self.action_time)
-            ok, observations = self.world.perform(step)
+        if self.skills is not None:
+            outcome, text = self._run_skill(step, Run(), None)
+            ok = outcome == "succeeded"
+        else:
+            with self._the_robot():
+                time.sleep(self.action_time)
+                ok, observations = self.world.perform(step)
+            text = encode_result(ok, observations)
         self._log(f"{'succeeded' if ok else 'failed'} {step}")
         response.bool_value = ok
-        response.string_value = encode_result(ok, observations)
+        response.string_value = text
         return response
 
     def _on_facts(self, request: Any, response: Any) -> Any:
         response.success = True
         response.message = json.dumps(sorted(" ".join(f) for f in self.world.facts))
+        return response
+
+    def _on_info(self, request: Any, response: Any) -> Any:
+        response.success = True
+        response.message = json.dumps(self.info())
         return response
 
     # -- action servers ------------------------------------------------------------------------------
@@ -191,6 +288,16 @@ class SkillServer:
             return GoalResponse.REJECT
         return GoalResponse.ACCEPT
 
+    def _on_cancel(self, handle: Any) -> Any:
+        with self._lock:
+            entry = self._runs.get(bytes(handle.goal_id.uuid))
+        if entry is not None:
+            run, state, _ = entry
+            run.halt()
+            if state is not None:
+                state.request_preempt()
+        return CancelResponse.ACCEPT
+
     def _execute(self, action: str, handle: Any) -> Any:
         ticket = handle.request.order
         step = self._ticket(ticket)
@@ -199,7 +306,9 @@ class SkillServer:
             handle.abort()
             return result
         self._log(f"goal {step}")
-        with self._robot:
+        if self.skills is not None:
+            return self._execute_skill(step, ticket, handle, result)
+        with self._the_robot():
             for tick in range(10):
                 if handle.is_cancel_requested:
                     with self._lock:
@@ -222,36 +331,233 @@ class SkillServer:
             self._log(f"failed {step}")
         return result
 
+    # -- domain skills ----------------------------------------------------------------------------
+    def _execute_skill(self, step: PlanStep, ticket: int, handle: Any, result: Any) -> Any:
+        run = Run()
+        key = bytes(handle.goal_id.uuid)
+        with self._lock:
+            self._runs[key] = (run, None, step)
+        if handle.is_cancel_requested:
+            run.halt()
+        entered = [0]
+
+        def progress(path: str) -> None:
+            entered[0] += 1
+            handle.publish_feedback(self._fibonacci.Feedback(sequence=[entered[0]]))
+
+        try:
+            outcome, text = self._run_skill(step, run, key, progress)
+        finally:
+            with self._lock:
+                self._runs.pop(key, None)
+        with self._lock:
+            self._reports[ticket] = text
+        if outcome == "succeeded":
+            handle.succeed()
+            self._log(f"succeeded {step}")
+        elif outcome == "preempted" and handle.is_cancel_requested:
+            handle.canceled()
+            self._log(f"canceled {step}")
+        else:
+            handle.abort()
+            self._log(f"failed {step}")
+        return result
+
+    def _run_skill(
+        self,
+        step: PlanStep,
+        run: Run,
+        key: bytes | None,
+        progress: Callable[[str], None] | None = None,
+    ) -> tuple[str, str]:
+        """Execute the domain's skill for ``step``: (outcome, JSON result payload)."""
+        assert self.skills is not None
+        with self._the_robot():
+            if run.halted:
+                return "preempted", encode_result(False, [], "cancelled before it started")
+            try:
+                state, skill = self.skills.create(step)
+            except SkillError as exc:
+                return "aborted", encode_result(False, [], str(exc))
+            if key is not None:
+                with self._lock:
+                    self._runs[key] = (run, state, step)
+            if run.halted:
+                state.request_preempt()
+            label = f"/{step.action}"
+
+            def on_event(event: Event) -> None:
+                if isinstance(event, StateEntered):
+                    path = label + event.path.removeprefix("/ROOT")
+                    self._log(f"  state {path}")
+                    if progress is not None:
+                        progress(path)
+
+            container = state if isinstance(state, smach.Container) else None
+            if container is not None:
+                container.add_listener(on_event)
+            ud = smach.UserData()
+            ud.action = step.action
+            ud.arguments = step.arguments
+            ud.params = self.world.model.ground(step).binding
+            detail = ""
+            try:
+                with self.pacer.running(run) if self.pacer else contextlib.nullcontext(run):
+                    outcome = state.execute(ud)
+            except Exception as exc:
+                outcome = "preempted" if run.halted else "aborted"
+                detail = "halted" if run.halted else f"the skill raised: {exc}"
+            finally:
+                if container is not None:
+                    container.remove_listener(on_event)
+        mapped = skill.map_outcome(str(outcome)) if skill is not None else str(outcome)
+        if mapped == "preempted" or (run.halted and mapped != "succeeded"):
+            return "preempted", encode_result(False, [], detail or "cancelled")
+        try:
+            observations = normalise_observations(ud._data.get("observations"))
+        except ValueError as exc:
+            return "aborted", encode_result(False, [], f"malformed observations: {exc}")
+        ok = mapped == "succeeded"
+        if not ok and not detail:
+            detail = f"the skill ended {outcome}"
+        return ("succeeded" if ok else "aborted"), encode_result(ok, observations, detail)
+
+    def halt_all(self) -> None:
+        """Stop every running skill (the robot is shutting down)."""
+        with self._lock:
+            entries = list(self._runs.values())
+        for run, state, _ in entries:
+            run.halt()
+            if state is not None:
+                state.request_preempt()
+
     def destroy(self) -> None:
+        self.halt_all()
         for server in self._servers:
             server.destroy()
         for service in self._services:
             self.node.destroy_service(service)
 
 
+def _lease_profile(lease: float) -> Path | None:
+    """Write a short-lease Fast DDS profile and select it (unless one is selected)."""
+    if lease <= 0 or os.environ.get("FASTDDS_DEFAULT_PROFILES_FILE"):
+        return None
+    announce = max(0.1, lease / 4)
+    text = SHORT_LEASE_PROFILE.format(
+        sec=int(lease),
+        nanosec=round((lease % 1) * 1e9),
+        asec=int(announce),
+        ananosec=round((announce % 1) * 1e9),
+    )
+    handle, name = tempfile.mkstemp(prefix="plan_bridge_lease_", suffix=".xml")
+    with os.fdopen(handle, "w") as file:
+        file.write(text)
+    os.environ["FASTDDS_DEFAULT_PROFILES_FILE"] = name
+    return Path(name)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m plan_bridge.ros.skill_server",
-        description="Serve a PDDL domain's actions as ROS 2 actions, backed by a simulated world.",
+        description="A simulated robot node: serve a domain's actions as ROS 2 actions. A "
+        "domain folder runs its own skill state machines against its simulated world; a "
+        "domain.pddl runs every action symbolically.",
     )
-    parser.add_argument("domain")
-    parser.add_argument("problem")
+    parser.add_argument("target", metavar="TARGET", help="a domain folder or a domain.pddl")
+    parser.add_argument("problem_file", metavar="PROBLEM", nargs="?", help="problem file")
+    parser.add_argument(
+        "--problem", help="problem file or name in the folder's problems/ (default: the first)"
+    )
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--fail-rate", type=float, default=0.0)
-    parser.add_argument("--action-time", type=float, default=0.2, help="seconds per action")
+    parser.add_argument(
+        "--fail-rate",
+        type=float,
+        default=None,
+        help="fault probability (default: 0.1 for a domain's own skills, 0 for symbolic ones)",
+    )
+    parser.add_argument(
+        "--time-scale",
+        type=float,
+        default=0.01,
+        help="wall seconds per simulated second of a domain's skills (default 0.01; 0: no pacing)",
+    )
+    parser.add_argument(
+        "--action-time", type=float, default=0.2, help="seconds per symbolic action"
+    )
     parser.add_argument("--prefix", default="skills", help="action names: PREFIX/ACTION")
     parser.add_argument("--node-name", default="skill_server")
+    parser.add_argument(
+        "--lease",
+        type=float,
+        default=2.0,
+        help="DDS lease in seconds, so that executives notice a crashed robot in about that "
+        "time (default 2; 0 keeps Fast DDS's 20 s; ignored if FASTDDS_DEFAULT_PROFILES_FILE is set)",
+    )
+    parser.add_argument(
+        "--exit-with-parent",
+        action="store_true",
+        help="exit when the process that started this one exits (used by plan-bridge run --ros)",
+    )
     args = parser.parse_args(argv)
+    if args.problem and args.problem_file:
+        parser.error("give the problem either as PROBLEM or as --problem, not both")
+    if args.fail_rate is not None and not 0.0 <= args.fail_rate <= 1.0:
+        parser.error(f"--fail-rate must be between 0 and 1, got {args.fail_rate}")
+    if args.time_scale < 0:
+        parser.error(f"--time-scale must be >= 0, got {args.time_scale}")
 
-    task = load_task(args.domain, args.problem)
-    world = SimulatedWorld(task, seed=args.seed, fail_rate=args.fail_rate)
+    from plan_bridge.mission import load_target
+
+    try:
+        target = load_target(args.target, args.problem or args.problem_file)
+        symbolic = target.module is None or not hasattr(target.module, "setup")
+        fail_rate = args.fail_rate if args.fail_rate is not None else (0.0 if symbolic else 0.1)
+        setup = target.setup(seed=args.seed, fail_rate=fail_rate)
+        if not symbolic:
+            problems = setup.skills.check(target.task)
+            if problems:
+                raise PlanBridgeError(
+                    "the skills do not fit the domain:\n  " + "\n  ".join(problems)
+                )
+    except (PlanBridgeError, OSError) as exc:
+        print(f"skill_server: {exc}", file=sys.stderr, flush=True)
+        return 2
+    world = setup.world
+    if not isinstance(world, SimulatedWorld):
+        world = SimulatedWorld(target.task, seed=args.seed, fail_rate=fail_rate)
+        symbolic = True
+    pacer = None
+    if not symbolic:
+        pacer = Pacer(args.time_scale)
+        pace(world, pacer)
+
+    profile = _lease_profile(args.lease)
+    parent = os.getppid()
     rclpy.init()
     node = rclpy.create_node(args.node_name)
 
     def say(line: str) -> None:
         print(line, flush=True)
 
-    server = SkillServer(node, world, prefix=args.prefix, action_time=args.action_time, log=say)
+    server = SkillServer(
+        node,
+        world,
+        prefix=args.prefix,
+        action_time=args.action_time,
+        log=say,
+        skills=None if symbolic else setup.skills,
+        pacer=pacer,
+        concurrent=bool(setup.concurrent) and not symbolic,
+        meta={
+            "target": target.name,
+            "problem": target.problem_path.name,
+            "seed": args.seed,
+            "fail_rate": fail_rate,
+            "time_scale": args.time_scale if not symbolic else None,
+            "action_time": args.action_time if symbolic else None,
+        },
+    )
     executor = MultiThreadedExecutor(num_threads=4)
     executor.add_node(node)
     stop = threading.Event()
@@ -261,6 +567,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         while not stop.is_set() and rclpy.ok():
             executor.spin_once(timeout_sec=0.1)
+            if args.exit_with_parent and os.getppid() != parent:
+                say("parent exited")
+                break
     except ExternalShutdownException:
         pass
     say(f"faults {len(world.faults)}")
@@ -268,6 +577,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     executor.shutdown(timeout_sec=1)
     node.destroy_node()
     rclpy.try_shutdown()
+    if profile is not None:
+        with contextlib.suppress(OSError):
+            profile.unlink()
     return 0
 
 

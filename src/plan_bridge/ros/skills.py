@@ -10,6 +10,7 @@ from plan_bridge.domain import PlanningTask
 from plan_bridge.planning import PlanStep
 from plan_bridge.ros.protocol import (
     FACTS_SERVICE,
+    INFO_SERVICE,
     PERFORM_SERVICE,
     REPORT_SERVICE,
     SUBMIT_SERVICE,
@@ -20,7 +21,7 @@ from plan_bridge.ros.protocol import (
 from plan_bridge.skills import SkillRegistry
 from smach.ros import ServiceState, SimpleActionState
 
-__all__ = ["remote_facts", "ros_skill", "ros_skills"]
+__all__ = ["remote_facts", "remote_info", "ros_skill", "ros_skills"]
 
 TRANSPORTS = ("action", "service")
 
@@ -169,12 +170,12 @@ def ros_skills(
     return registry
 
 
-def remote_facts(node: Any, *, prefix: str = "skills", timeout: float = 10.0) -> list[str]:
-    """The facts true in the skill server's world (its ``facts`` service), as text."""
+def _trigger(node: Any, service: str, timeout: float) -> str:
+    """Call a ``std_srvs/Trigger`` service of the skill server: its message."""
     _, _, trigger = interfaces()
     state = ServiceState(
         node,
-        f"{prefix}/{FACTS_SERVICE}",
+        service,
         trigger,
         response_key="response",
         server_wait_timeout=timeout,
@@ -183,8 +184,28 @@ def remote_facts(node: Any, *, prefix: str = "skills", timeout: float = 10.0) ->
     ud = smach.UserData()
     try:
         if state.execute(ud) != "succeeded":
-            raise RuntimeError(f"the skill server's {prefix}/{FACTS_SERVICE} did not answer")
-        facts = json.loads(ud.response.message)
+            raise RuntimeError(f"the skill server's {service} did not answer within {timeout:g} s")
+        return str(ud.response.message)
     finally:
         state.destroy()
+
+
+def remote_facts(node: Any, *, prefix: str = "skills", timeout: float = 10.0) -> list[str]:
+    """The facts true in the skill server's world (its ``facts`` service), as text."""
+    facts = json.loads(_trigger(node, f"{prefix}/{FACTS_SERVICE}", timeout))
     return [f"({fact})" for fact in facts]
+
+
+def remote_info(node: Any, *, prefix: str = "skills", timeout: float = 10.0) -> dict[str, Any]:
+    """The skill server's ``info``: its task, seed, fault rate, faults, world clock...
+
+    RuntimeError if it does not answer within ``timeout`` or answers nonsense.
+    """
+    text = _trigger(node, f"{prefix}/{INFO_SERVICE}", timeout)
+    try:
+        info = json.loads(text) if len(text) < 1_000_000 else None
+    except ValueError:
+        info = None
+    if not isinstance(info, dict):
+        raise RuntimeError(f"the skill server's {prefix}/{INFO_SERVICE} answered malformed JSON")
+    return info

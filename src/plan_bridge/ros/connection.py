@@ -1,0 +1,241 @@
+"""The executive's side of a mission across processes (``plan-bridge run --ros``).
+
+A :class:`RobotConnection` joins the ROS graph with its own rclpy context and node,
+starts a robot node (``python -m plan_bridge.ros.skill_server``) as a subprocess or
+connects to one that is already running, checks that the robot runs the same
+problem (``info``: :func:`~plan_bridge.ros.protocol.task_digest`), and builds the
+executive's skills as ROS clients of it (:func:`~plan_bridge.ros.ros_skills`).
+:meth:`close` leaves the graph and stops the robot process it started.
+"""
+
+from __future__ import annotations
+
+import collections
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from typing import Any, TextIO
+
+from plan_bridge.errors import PlanBridgeError
+from plan_bridge.ros.protocol import task_digest
+from plan_bridge.ros.skills import remote_info, ros_skills
+from plan_bridge.skills import SkillRegistry
+
+__all__ = ["RobotConnection", "RobotError"]
+
+
+class RobotError(PlanBridgeError):
+    """The robot node could not be started or reached, or runs another problem."""
+
+
+class RobotConnection:
+    """A rclpy node of the executive and the robot node it drives.
+
+    ``start_robot``: start ``python -m plan_bridge.ros.skill_server`` for
+    ``target`` (a :class:`~plan_bridge.mission.Target`) with ``seed``,
+    ``fail_rate`` and ``time_scale``, and stop it in :meth:`close`. Otherwise
+    connect to the robot node already serving under ``prefix``. ``log`` receives
+    what happens (and the robot's own lines, prefixed ``[robot]``).
+    """
+
+    #: Seconds to wait for a robot we started to print ``ready``.
+    START_TIMEOUT = 60.0
+    #: Lines of the robot's output kept (for error messages and tests).
+    KEEP_LINES = 2000
+
+    def __init__(
+        self,
+        target: Any,
+        *,
+        prefix: str | None = None,
+        start_robot: bool = True,
+        seed: int = 0,
+        fail_rate: float | None = None,
+        time_scale: float = 0.01,
+        wait_timeout: float = 20.0,
+        server_wait_timeout: float = 10.0,
+        log: TextIO | None = None,
+    ) -> None:
+        self.target = target
+        self.start_robot = start_robot
+        self.prefix = prefix or (f"robot_{os.getpid()}" if start_robot else "robot")
+        self.seed = seed
+        self.fail_rate = fail_rate
+        self.time_scale = time_scale
+        self.wait_timeout = wait_timeout
+        self.server_wait_timeout = server_wait_timeout
+        self.log = log
+        self.process: subprocess.Popen[str] | None = None
+        self.lines: collections.deque[str] = collections.deque(maxlen=self.KEEP_LINES)
+        self.robot_info: dict[str, Any] = {}
+        self.context: Any = None
+        self.node: Any = None
+        self._ready = threading.Event()
+        self._pump_thread: threading.Thread | None = None
+
+    # -- life cycle -------------------------------------------------------------------
+    def open(self) -> RobotConnection:
+        """Start or find the robot and connect; RobotError if that fails."""
+        try:
+            self._open()
+        except BaseException:
+            self.close()
+            raise
+        return self
+
+    def _open(self) -> None:
+        if self.start_robot and not os.environ.get("ROS_AUTOMATIC_DISCOVERY_RANGE"):
+            # Both processes run here: keep DDS traffic on this machine.
+            os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+        where = (
+            f"ROS_DOMAIN_ID={os.environ.get('ROS_DOMAIN_ID', '0 (default)')}, "
+            f"discovery {os.environ.get('ROS_AUTOMATIC_DISCOVERY_RANGE', 'SUBNET (default)')}"
+        )
+        if self.start_robot:
+            self._say(f"ros: starting a robot node under /{self.prefix} ({where})")
+            self._spawn()
+        else:
+            self._say(f"ros: connecting to the running robot node under /{self.prefix} ({where})")
+        from smach.ros._api import rclpy
+
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context)
+        self.node = rclpy.create_node(f"plan_bridge_executive_{os.getpid()}", context=self.context)
+        try:
+            self.robot_info = remote_info(self.node, prefix=self.prefix, timeout=self.wait_timeout)
+        except RuntimeError as exc:
+            hint = (
+                ""
+                if self.start_robot
+                else " (start one with: python -m plan_bridge.ros.skill_server "
+                f"{self._target_path()} --problem {self.target.problem_path} "
+                f"--prefix {self.prefix}; same ROS_DOMAIN_ID on both sides)"
+            )
+            raise RobotError(f"no robot node answers under /{self.prefix}: {exc}{hint}") from None
+        info = self.robot_info
+        if info.get("digest") != task_digest(self.target.task):
+            raise RobotError(
+                f"the robot node under /{self.prefix} runs {info.get('target')} "
+                f"{info.get('problem')} ({info.get('task')}), not {self.target.name} "
+                f"{self.target.problem_path.name}: start it with the same domain and problem"
+            )
+        how = f"started here, pid {info.get('pid')}" if self.start_robot else "already running"
+        self._say(
+            f"ros: robot node {info.get('node')} ({how}) serves {info.get('target')} "
+            f"{info.get('problem')} under /{self.prefix}: {info.get('mode')}, seed "
+            f"{info.get('seed')}, fail rate {info.get('fail_rate')}"
+            + (f", time scale {info['time_scale']}" if info.get("time_scale") is not None else "")
+        )
+
+    def _target_path(self) -> str:
+        folder = getattr(self.target, "folder", None)
+        return str(folder if folder is not None else self.target.domain_path)
+
+    def _spawn(self) -> None:
+        command = [
+            sys.executable,
+            "-m",
+            "plan_bridge.ros.skill_server",
+            self._target_path(),
+            "--problem",
+            str(self.target.problem_path),
+            "--seed",
+            str(self.seed),
+            "--prefix",
+            self.prefix,
+            "--node-name",
+            f"robot_{os.getpid()}",
+            "--time-scale",
+            str(self.time_scale),
+            "--exit-with-parent",
+        ]
+        if self.fail_rate is not None:
+            command += ["--fail-rate", str(self.fail_rate)]
+        # stderr is inherited: the robot's errors appear as they happen.
+        self.process = subprocess.Popen(
+            command, stdout=subprocess.PIPE, text=True, stdin=subprocess.DEVNULL
+        )
+        self._pump_thread = threading.Thread(target=self._pump, name="robot-output", daemon=True)
+        self._pump_thread.start()
+        deadline = time.monotonic() + self.START_TIMEOUT
+        while not self._ready.wait(0.05):
+            if self.process.poll() is not None:
+                raise RobotError(
+                    f"the robot node exited with code {self.process.returncode} before it was "
+                    f"ready: {' '.join(command[1:])}"
+                )
+            if time.monotonic() > deadline:
+                raise RobotError(f"the robot node was not ready within {self.START_TIMEOUT:g} s")
+
+    def _pump(self) -> None:
+        process = self.process
+        assert process is not None and process.stdout is not None
+        for raw in process.stdout:
+            line = raw.rstrip("\n")
+            self.lines.append(line)
+            if line == "ready":
+                self._ready.set()
+            elif self.log is not None:
+                self._say(f"  [robot] {line}")
+
+    def _say(self, line: str) -> None:
+        if self.log is not None:
+            print(line, file=self.log, flush=True)
+
+    # -- use ----------------------------------------------------------------------------
+    @property
+    def concurrent(self) -> bool:
+        return bool(self.robot_info.get("concurrent", False))
+
+    def skills(self) -> SkillRegistry:
+        """The executive's skills: ROS clients of the robot's actions."""
+        return ros_skills(
+            self.node,
+            self.target.task,
+            prefix=self.prefix,
+            server_wait_timeout=self.server_wait_timeout,
+        )
+
+    def info(self, timeout: float = 5.0) -> dict[str, Any] | None:
+        """The robot's current ``info`` (None if it does not answer)."""
+        try:
+            return remote_info(self.node, prefix=self.prefix, timeout=timeout)
+        except RuntimeError:
+            return None
+
+    def close(self) -> None:
+        """Leave the ROS graph; stop the robot process if we started it."""
+        if self.context is not None:
+            from smach.ros.executor import SmachExecutor
+
+            helper = SmachExecutor._instances.get(id(self.context))
+            if helper is not None:
+                helper.shutdown()
+            if self.node is not None:
+                self.node.destroy_node()
+            from smach.ros._api import rclpy
+
+            rclpy.try_shutdown(context=self.context)
+            self.context = None
+            self.node = None
+        process = self.process
+        if process is not None and process.poll() is None:
+            process.send_signal(signal.SIGTERM)
+            try:
+                process.wait(5)
+            except subprocess.TimeoutExpired:
+                process.kill()
+                process.wait(5)
+        if self._pump_thread is not None:
+            self._pump_thread.join(2)
+        if process is not None and process.stdout is not None:
+            process.stdout.close()
+
+    def __enter__(self) -> RobotConnection:
+        return self.open()
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
