@@ -21,7 +21,7 @@ import os
 import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import TextIO
+from typing import Any, TextIO
 
 __all__ = ["COMMANDS", "Command", "main", "register"]
 
@@ -114,14 +114,27 @@ def fail(message: str, code: int = EXIT_BAD_INPUT) -> int:
     return code
 
 
-def positive_seconds(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected seconds (a number), got {text!r}") from None
-    if not (0 < value < float("inf")):  # also refuses NaN
-        raise argparse.ArgumentTypeError(f"expected a positive number of seconds, got {text!r}")
-    return value
+def bounded(
+    kind: Callable[[str], float], low: float, high: float, what: str, *, open_low: bool = False
+) -> Callable[[str], Any]:
+    """An argparse type: ``kind(text)`` within [low, high] (or (low, high]), named ``what``."""
+
+    def parse(text: str) -> Any:
+        try:
+            value = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}") from None
+        # `not (...)` also refuses NaN.
+        if not ((low < value) if open_low else (low <= value)) or not value <= high:
+            raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}")
+        return value
+
+    return parse
+
+
+positive_seconds = bounded(
+    float, 0.0, sys.float_info.max, "a positive number of seconds", open_low=True
+)
 
 
 # -- plan ------------------------------------------------------------------------

@@ -246,17 +246,23 @@ class Remapper(UserData):
             self._d[target] = value
         owner = self._owner
         if owner is not None and owner._bus.listeners:
-            t, thread = stamp()
-            owner._bus.emit(
-                UserdataWritten(
-                    path=owner._path,
-                    time=t,
-                    thread=thread,
-                    key=target,
-                    value=value,
-                    writer=self._writer,
-                )
+            self._written(target, value)
+
+    def _written(self, target: str, value: Any) -> None:
+        """Tell the tree's listeners that ``target`` of the container was written."""
+        owner = self._owner
+        assert owner is not None
+        t, thread = stamp()
+        owner._bus.emit(
+            UserdataWritten(
+                path=owner._path,
+                time=t,
+                thread=thread,
+                key=target,
+                value=value,
+                writer=self._writer,
             )
+        )
 
     def __getattr__(self, name: str) -> Any:
         if name.startswith("__"):
@@ -330,17 +336,7 @@ def _fast_setattr(self: Remapper, name: str, value: Any) -> None:
     self._d[target] = value  # type: ignore[index]
     owner = self._owner
     if owner is not None and owner._bus.listeners:
-        t, thread = stamp()
-        owner._bus.emit(
-            UserdataWritten(
-                path=owner._path,
-                time=t,
-                thread=thread,
-                key=target,
-                value=value,
-                writer=self._writer,
-            )
-        )
+        self._written(target, value)
 
 
 def _key_property(key: str, target: str, const: bool) -> property:
