@@ -5,6 +5,10 @@
     python -m smach.introspection view RUN.jsonl [--port N] [--host H] [--follow]
     python -m smach.introspection export RUN.jsonl --format dot|mermaid|svg
                                          [--at SECONDS | --event N] [-o FILE]
+    python -m smach.introspection ros SERVER_NAME [--port N] [--host H] [--timeout S]
+
+``ros`` follows a remote executive through its IntrospectionServer topics (needs
+the ``ros`` extra; :class:`smach.ros.viewer_source.RosSource`).
 
 ``plan-bridge view`` and ``plan-bridge export`` reuse :func:`configure_view`,
 :func:`configure_export`, :func:`run_view` and :func:`run_export`.
@@ -22,9 +26,11 @@ __all__ = [
     "add_moment",
     "build_parser",
     "configure_export",
+    "configure_ros",
     "configure_view",
     "main",
     "run_export",
+    "run_ros",
     "run_view",
 ]
 
@@ -101,6 +107,27 @@ def configure_view(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def configure_ros(parser: argparse.ArgumentParser) -> None:
+    """Arguments of ``ros`` (server name, --port, --host, --timeout)."""
+    parser.add_argument(
+        "server", metavar="SERVER_NAME", help="the name given to IntrospectionServer"
+    )
+    parser.add_argument(
+        "--port", type=_port, default=0, help="port to listen on (default: a free one)"
+    )
+    parser.add_argument(
+        "--host",
+        default="127.0.0.1",
+        help="address to bind (default 127.0.0.1; anything else exposes the page to the network)",
+    )
+    parser.add_argument(
+        "--timeout",
+        type=_seconds,
+        default=10.0,
+        help="seconds to wait for the server's first message (default 10)",
+    )
+
+
 def _fail(prog: str, message: str) -> int:
     print(f"{prog}: error: {message}", file=sys.stderr, flush=True)
     return EXIT_BAD_INPUT
@@ -143,17 +170,45 @@ def run_view(args: argparse.Namespace, prog: str = "smach-viewer") -> int:
     return EXIT_OK
 
 
+def run_ros(args: argparse.Namespace, prog: str = "smach-viewer") -> int:
+    try:
+        from smach.ros.viewer_source import RosSource
+    except ImportError as exc:
+        return _fail(prog, f"the ros command needs rclpy: {exc}")
+    from smach.exceptions import SmachError
+    from smach.introspection.server import serve
+
+    try:
+        source = RosSource(args.server, timeout=args.timeout)
+    except (TimeoutError, ValueError, SmachError) as exc:
+        return _fail(prog, str(exc))
+    try:
+        viewer = serve(source, port=args.port, host=args.host, quiet=True)
+    except OSError as exc:
+        source.close()
+        return _fail(prog, f"cannot listen on {args.host}:{args.port}: {exc.strerror or exc}")
+    print(f"{prog}: following {source.base} at {viewer.url} (Ctrl-C to stop)", file=sys.stderr)
+    sys.stderr.flush()
+    viewer.wait()
+    return EXIT_OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="python -m smach.introspection",
         description="Replay and export smach journals (JSON lines written by "
-        "smach.introspection.journal.Journal).",
+        "smach.introspection.journal.Journal), or follow a ROS 2 IntrospectionServer.",
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     configure_view(sub.add_parser("view", help="serve the viewer page over a journal (replay)"))
     configure_export(
         sub.add_parser(
             "export", help="write DOT, Mermaid or SVG of a journal's machine at a given moment"
+        )
+    )
+    configure_ros(
+        sub.add_parser(
+            "ros", help="serve the viewer page over a ROS 2 IntrospectionServer (ros extra)"
         )
     )
     return parser
@@ -163,4 +218,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     if args.command == "view":
         return run_view(args)
+    if args.command == "ros":
+        return run_ros(args)
     return run_export(args)
