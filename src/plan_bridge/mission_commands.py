@@ -18,6 +18,7 @@ from plan_bridge.cli import (
     EXIT_FAILED,
     EXIT_OK,
     Command,
+    bounded,
     fail,
     positive_seconds,
     register,
@@ -32,26 +33,8 @@ __all__ = ["ProgressPrinter"]
 DEFAULT_FAIL_RATE = 0.1
 
 
-def _probability(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"expected a probability between 0 and 1, got {text!r}"
-        ) from None
-    if not 0.0 <= value <= 1.0:
-        raise argparse.ArgumentTypeError(f"expected a probability between 0 and 1, got {text!r}")
-    return value
-
-
-def _non_negative_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
-    return value
+_probability = bounded(float, 0.0, 1.0, "a probability between 0 and 1")
+_non_negative_int = bounded(int, 0, float("inf"), "a whole number >= 0")
 
 
 def _configure_target(parser: argparse.ArgumentParser, optional: bool = False) -> None:
@@ -121,6 +104,34 @@ def _configure_run(parser: argparse.ArgumentParser) -> None:
         "--json", action="store_true", help="print one JSON object with the results"
     )
     parser.add_argument("--quiet", action="store_true", help="no progress output")
+    ros = parser.add_argument_group(
+        "across processes (ROS 2)", "see docs/ros.md, 'Missions across processes'"
+    )
+    ros.add_argument(
+        "--ros",
+        action="store_true",
+        help="run the skills on a robot node over ROS 2; the node is started here as a "
+        "subprocess (python -m plan_bridge.ros.skill_server) unless --no-robot",
+    )
+    ros.add_argument(
+        "--no-robot",
+        action="store_true",
+        help="with --ros: start no robot node; connect to the one already running (on this "
+        "machine or another, same ROS_DOMAIN_ID) under --ros-prefix",
+    )
+    ros.add_argument(
+        "--ros-prefix",
+        metavar="NAME",
+        help="with --ros: the robot's action and service prefix (default: robot with "
+        "--no-robot, robot_PID for a robot started here)",
+    )
+    ros.add_argument(
+        "--time-scale",
+        type=bounded(float, 0.0, 1e6, "seconds >= 0"),
+        default=0.01,
+        metavar="S",
+        help="with --ros: wall seconds per simulated second on the robot started here (default 0.01)",
+    )
 
 
 def _load(args: argparse.Namespace) -> Target:
@@ -134,7 +145,8 @@ def _run(args: argparse.Namespace) -> int:
 
     started = time.monotonic()
     try:
-        return _run_mission(args, started)
+        with contextlib.ExitStack() as resources:
+            return _run_mission(args, started, resources)
     except PlanBridgeError as exc:
         return fail(str(exc))
     except OSError as exc:
@@ -173,13 +185,37 @@ def _resume_arguments(
         )
     for key in RESUMABLE:
         setattr(args, key, run[key])
+    if run.get("ros"):
+        return fail(
+            f"{args.resume}: a run with --ros cannot be resumed: the robot's world lives in its "
+            f"own process and the journal holds no snapshot of it"
+        )
     if any(r.get("kind") == "summary" for r in records):
         return fail(f"{args.resume}: that run already finished (the journal has its summary)")
     checkpoints = [r for r in records if r.get("kind") == "checkpoint"]
     return run, checkpoints[-1] if checkpoints else None
 
 
-def _run_mission(args: argparse.Namespace, started: float) -> int:
+def _connect_robot(
+    args: argparse.Namespace, target: Target, fail_rate: float | None, resources: Any
+) -> Any:
+    """Start (or find) the robot node of ``--ros`` and connect to it."""
+    from plan_bridge.ros.connection import RobotConnection
+
+    robot = RobotConnection(
+        target,
+        prefix=args.ros_prefix,
+        start_robot=not args.no_robot,
+        seed=args.seed,
+        fail_rate=fail_rate,
+        time_scale=args.time_scale,
+        log=None if args.quiet else sys.stderr,
+    )
+    resources.callback(robot.close)
+    return robot.open()
+
+
+def _run_mission(args: argparse.Namespace, started: float, resources: Any = None) -> int:
     from dataclasses import replace
 
     from plan_bridge.executive import Executive, ReplanPolicy
@@ -195,6 +231,10 @@ def _run_mission(args: argparse.Namespace, started: float) -> int:
         _, checkpoint = resumed
     elif args.target is None:
         return fail("give a TARGET (a domain folder or a domain.pddl), or --resume RUN.jsonl")
+    if not args.ros and (args.no_robot or args.ros_prefix):
+        return fail("--no-robot and --ros-prefix need --ros")
+    if args.ros and args.resume:
+        return fail("--resume cannot be combined with --ros (the robot's world is not journaled)")
     try:
         policy = replace(
             ReplanPolicy.named(args.policy),
@@ -209,7 +249,20 @@ def _run_mission(args: argparse.Namespace, started: float) -> int:
         args.fail_rate if args.fail_rate is not None else (0.0 if symbolic else DEFAULT_FAIL_RATE)
     )
     planner = get_planner(args.planner)
-    setup = target.setup(seed=args.seed, fail_rate=fail_rate)
+    robot = None
+    if args.ros:
+        from plan_bridge.mission import MissionSetup
+
+        # The skills run on the robot node, against its world: nothing is simulated here.
+        robot = _connect_robot(
+            args, target, args.fail_rate if args.no_robot else fail_rate, resources
+        )
+        # A running robot (--no-robot) has its own seed and fault rate: those count.
+        fail_rate = robot.robot_info.get("fail_rate", fail_rate)
+        args.seed = robot.robot_info.get("seed", args.seed)
+        setup = MissionSetup(skills=robot.skills(), concurrent=robot.concurrent)
+    else:
+        setup = target.setup(seed=args.seed, fail_rate=fail_rate)
     problems = setup.skills.check(target.task)
     if problems:
         return fail("the skills do not fit the domain:\n  " + "\n  ".join(problems))
@@ -229,9 +282,12 @@ def _run_mission(args: argparse.Namespace, started: float) -> int:
     out = sys.stderr
     if not args.quiet:
         verb = "resuming" if args.resume else "run"
+        skills_text = "symbolic skills" if symbolic else "domain skills"
+        if robot is not None:
+            skills_text = f"{robot.robot_info.get('mode')} on the robot node /{robot.prefix}"
         print(
             f"plan-bridge {verb}: {target.name}, problem {target.problem_path.name} "
-            f"({'symbolic skills' if symbolic else 'domain skills'}, seed {args.seed}, "
+            f"({skills_text}, seed {args.seed}, "
             f"fail rate {fail_rate:g}, planner {planner.name})",
             file=out,
             flush=True,
@@ -244,6 +300,9 @@ def _run_mission(args: argparse.Namespace, started: float) -> int:
         run_options.update(
             target=str(args.target), problem=str(target.problem_path), fail_rate=fail_rate
         )
+        if robot is not None:
+            # The robot's world lives in its process: checkpoints hold no world snapshot.
+            run_options["ros"] = robot.prefix
         journal = Journal(
             journal_path,
             executive,
@@ -284,6 +343,9 @@ def _run_mission(args: argparse.Namespace, started: float) -> int:
             journal.write_record("summary", **report.to_json())
             journal.close()
     faults = getattr(world, "faults_injected", None)
+    robot_info = robot.info() if robot is not None else None
+    if robot_info is not None:
+        faults = robot_info.get("faults_injected")
     if args.json:
         data: dict[str, Any] = {
             "target": target.name,
@@ -297,6 +359,14 @@ def _run_mission(args: argparse.Namespace, started: float) -> int:
             data["faults_injected"] = faults
         if hasattr(world, "sim_time"):
             data["sim_time_s"] = round(float(world.sim_time), 3)
+        if robot is not None:
+            data["ros"] = {
+                "prefix": robot.prefix,
+                "robot": "started" if robot.start_robot else "connected",
+                "robot_info": robot_info,
+            }
+            if robot_info is not None:
+                data["sim_time_s"] = robot_info.get("sim_time")
         print(json.dumps(data, indent=None))
     if not args.quiet:
         print(_summary(outcome, report, faults), file=out, flush=True)

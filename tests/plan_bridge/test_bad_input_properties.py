@@ -100,7 +100,7 @@ def test_deep_nesting_is_refused_before_the_parser_sees_it() -> None:
     ("args", "message"),
     [
         (["run"], "give a TARGET"),
-        (["run", str(DATA), "--seed", "-1"], "expected a number >= 0"),
+        (["run", str(DATA), "--seed", "-1"], "expected a whole number >= 0"),
         (["run", str(DATA), "--fail-rate", "2"], "between 0 and 1"),
         (["run", str(DATA), "--policy", "magic"], "unknown replanning policy 'magic'"),
         (["run", str(DATA), "--problem", "p99"], "no such problem; problems of rooms: p01, p02"),

@@ -4,7 +4,10 @@
 action of a PDDL domain as a ROS 2 action backed by a simulated world;
 :func:`ros_skills` builds a skill registry of ROS clients of it, so an
 :class:`~plan_bridge.executive.Executive` runs its plan on the remote robot. The
-wire format is in :mod:`plan_bridge.ros.protocol`.
+wire format is in :mod:`plan_bridge.ros.protocol`. For a domain folder the
+server runs the domain's own skill machines against its simulated world, and
+:class:`plan_bridge.ros.connection.RobotConnection` starts or finds such a robot
+node for ``plan-bridge run --ros``.
 """
 
 from __future__ import annotations
@@ -12,13 +15,14 @@ from __future__ import annotations
 from typing import Any
 
 from plan_bridge.ros.protocol import decode_result, encode_result
-from plan_bridge.ros.skills import remote_facts, ros_skill, ros_skills
+from plan_bridge.ros.skills import remote_facts, remote_info, ros_skill, ros_skills
 
 __all__ = [
     "SkillServer",
     "decode_result",
     "encode_result",
     "remote_facts",
+    "remote_info",
     "ros_skill",
     "ros_skills",
 ]

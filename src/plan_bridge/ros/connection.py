@@ -11,6 +11,7 @@ executive's skills as ROS clients of it (:func:`~plan_bridge.ros.ros_skills`).
 from __future__ import annotations
 
 import collections
+import itertools
 import os
 import signal
 import subprocess
@@ -19,16 +20,33 @@ import threading
 import time
 from typing import Any, TextIO
 
+import smach
 from plan_bridge.errors import PlanBridgeError
+from plan_bridge.planning import PlanStep
 from plan_bridge.ros.protocol import task_digest
 from plan_bridge.ros.skills import remote_info, ros_skills
 from plan_bridge.skills import SkillRegistry
 
-__all__ = ["RobotConnection", "RobotError"]
+__all__ = ["RobotConnection", "RobotError", "RobotLost"]
+
+_nodes = itertools.count(1)
 
 
 class RobotError(PlanBridgeError):
     """The robot node could not be started or reached, or runs another problem."""
+
+
+class RobotLost(smach.State):
+    """The skill of a step while the robot node is gone: ``aborted`` at once."""
+
+    def __init__(self, step: PlanStep, reason: str) -> None:
+        super().__init__(outcomes=["succeeded", "aborted", "preempted"])
+        self.step = step
+        self.reason = reason
+
+    def execute(self, ud: smach.UserData) -> str:
+        smach.logerr(f"skill {self.step}: {self.reason}")
+        return "aborted"
 
 
 class RobotConnection:
@@ -103,7 +121,9 @@ class RobotConnection:
 
         self.context = rclpy.Context()
         rclpy.init(context=self.context)
-        self.node = rclpy.create_node(f"plan_bridge_executive_{os.getpid()}", context=self.context)
+        self.node = rclpy.create_node(
+            f"plan_bridge_executive_{os.getpid()}_{next(_nodes)}", context=self.context
+        )
         try:
             self.robot_info = remote_info(self.node, prefix=self.prefix, timeout=self.wait_timeout)
         except RuntimeError as exc:
@@ -121,6 +141,12 @@ class RobotConnection:
                 f"the robot node under /{self.prefix} runs {info.get('target')} "
                 f"{info.get('problem')} ({info.get('task')}), not {self.target.name} "
                 f"{self.target.problem_path.name}: start it with the same domain and problem"
+            )
+        if info.get("actions_run") or info.get("busy"):
+            self._say(
+                f"ros: warning: the robot node has already run {info.get('actions_run')} actions "
+                f"(busy: {', '.join(info.get('busy') or []) or 'no'}); its world is no longer the "
+                f"problem's initial state, which the plan assumes: restart it for a new mission"
             )
         how = f"started here, pid {info.get('pid')}" if self.start_robot else "already running"
         self._say(
@@ -180,6 +206,9 @@ class RobotConnection:
                 self._ready.set()
             elif self.log is not None:
                 self._say(f"  [robot] {line}")
+        code = process.wait()
+        if self.context is not None:  # not stopped by close()
+            self._say(f"ros: the robot node exited (code {code})")
 
     def _say(self, line: str) -> None:
         if self.log is not None:
@@ -190,14 +219,45 @@ class RobotConnection:
     def concurrent(self) -> bool:
         return bool(self.robot_info.get("concurrent", False))
 
+    def lost(self) -> str | None:
+        """Why the robot node is gone (None while it is there).
+
+        A robot started here is gone when its process exited; any robot when its
+        ``info`` service left the ROS graph (a crashed process leaves it when its
+        DDS lease expires: 2 s for ``skill_server``'s default ``--lease``).
+        """
+        if self.process is not None and self.process.poll() is not None:
+            return f"the robot node exited (code {self.process.returncode})"
+        if self.node is None:
+            return "not connected"
+        wanted = f"/{self.prefix}/info"
+        if not any(name == wanted for name, _ in self.node.get_service_names_and_types()):
+            return f"the robot node under /{self.prefix} left the ROS graph"
+        return None
+
     def skills(self) -> SkillRegistry:
-        """The executive's skills: ROS clients of the robot's actions."""
-        return ros_skills(
+        """The executive's skills: ROS clients of the robot's actions.
+
+        While the robot node is gone (:meth:`lost`), a step aborts at once instead
+        of waiting ``server_wait_timeout`` for it, so the executive's recovery
+        (retry, replan) ends quickly, ``aborted``; a robot that comes back is used
+        again.
+        """
+        registry = ros_skills(
             self.node,
             self.target.task,
             prefix=self.prefix,
             server_wait_timeout=self.server_wait_timeout,
         )
+        remote = registry.fallback
+        assert remote is not None
+
+        def skill(step: PlanStep) -> smach.State:
+            reason = self.lost()
+            return remote(step) if reason is None else RobotLost(step, reason)
+
+        registry.fallback = skill
+        return registry
 
     def info(self, timeout: float = 5.0) -> dict[str, Any] | None:
         """The robot's current ``info`` (None if it does not answer)."""

@@ -20,6 +20,7 @@ from plan_bridge.ros.protocol import (
 )
 from plan_bridge.skills import SkillRegistry
 from smach.ros import ServiceState, SimpleActionState
+from smach.ros._api import GoalStatus
 
 __all__ = ["remote_facts", "remote_info", "ros_skill", "ros_skills"]
 
@@ -99,6 +100,14 @@ def ros_skill(
     submit = basic_types.Request()
     submit.string_value = text
     quick = min(server_wait_timeout, 5.0)
+    # The report comes from the process that just ran the goal.
+    report_wait = min(server_wait_timeout, 2.0)
+
+    def ran_and_failed(ud: smach.UserData, status: int, result: Any) -> str | None:
+        # The server ran the action and it failed: its report says what the robot saw.
+        # Without a result (server gone, goal rejected) there is nobody to ask.
+        return "failed" if status == GoalStatus.STATUS_ABORTED else None
+
     sm = smach.StateMachine(outcomes=outcomes, output_keys=["observations"])
     with sm:
         smach.StateMachine.add(
@@ -124,9 +133,11 @@ def ros_skill(
                 server_wait_timeout=server_wait_timeout,
                 exec_timeout=exec_timeout,
                 preempt_timeout=preempt_timeout,
+                result_cb=ran_and_failed,
+                outcomes=["failed"],
             ),
             # A failed action still reports what the robot saw.
-            transitions={"succeeded": "REPORT", "aborted": "REPORT_FAILURE"},
+            transitions={"succeeded": "REPORT", "failed": "REPORT_FAILURE"},
         )
         for label, final in (("REPORT", None), ("REPORT_FAILURE", "aborted")):
             smach.StateMachine.add(
@@ -137,7 +148,7 @@ def ros_skill(
                     basic_types,
                     request_cb=ticket_request,
                     response_cb=read_result,
-                    server_wait_timeout=quick,
+                    server_wait_timeout=report_wait,
                     call_timeout=quick,
                 ),
                 transitions={} if final is None else {"succeeded": final},
