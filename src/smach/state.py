@@ -89,6 +89,14 @@ class State:
     def get_registered_output_keys(self) -> tuple[str, ...]:
         return tuple(self._output_keys)
 
+    def _adopt_interface(self, cb: object, *, outcomes: bool = True) -> None:
+        """Add the keys (and outcomes) a callback declared with :func:`smach.cb_interface`."""
+        if has_smach_interface(cb):
+            self.register_input_keys(cb.get_registered_input_keys())  # type: ignore[attr-defined]
+            self.register_output_keys(cb.get_registered_output_keys())  # type: ignore[attr-defined]
+            if outcomes:
+                self.register_outcomes(cb.get_registered_outcomes())  # type: ignore[attr-defined]
+
     def _interface_changed(self) -> None:
         """Tell the parent (which caches remappers built from our keys) to rebuild."""
         if self._parent is not None:
@@ -203,10 +211,7 @@ class CBState(State):
         self._cb = cb
         self._cb_args = tuple(cb_args or ())
         self._cb_kwargs = dict(cb_kwargs or {})
-        if has_smach_interface(cb):
-            self.register_input_keys(cb.get_registered_input_keys())  # type: ignore[attr-defined]
-            self.register_output_keys(cb.get_registered_output_keys())  # type: ignore[attr-defined]
-            self.register_outcomes(cb.get_registered_outcomes())  # type: ignore[attr-defined]
+        self._adopt_interface(cb)
 
     def execute(self, ud: UserData) -> str | None:
         return self._cb(ud, *self._cb_args, **self._cb_kwargs)  # type: ignore[no-any-return]

@@ -9,7 +9,6 @@ from typing import Any
 import smach
 from smach.ros.executor import seconds
 from smach.ros.ros_state import RosState
-from smach.util import has_smach_interface
 
 __all__ = ["ConditionState"]
 
@@ -40,9 +39,7 @@ class ConditionState(RosState):
             raise smach.InvalidStateError(
                 f"ConditionState: poll_rate must be > 0 Hz, got {poll_rate}"
             )
-        if has_smach_interface(cond_cb):
-            self.register_input_keys(cond_cb.get_registered_input_keys())  # type: ignore[attr-defined]
-            self.register_output_keys(cond_cb.get_registered_output_keys())  # type: ignore[attr-defined]
+        self._adopt_interface(cond_cb, outcomes=False)
         self._cond_cb = cond_cb
         self._period = 1.0 / poll_rate
         self._timeout = seconds(timeout, "timeout")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import threading
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any
 
 import smach
@@ -76,6 +76,26 @@ class RosState(smach.State):
             if left is not None and left <= 0:
                 return "timeout"
             self._wait(POLL_PERIOD if left is None else min(POLL_PERIOD, left))
+
+    #: What the state talks to (service, action, topic name), for error messages.
+    _ros_name: str = ""
+
+    def _callback(
+        self,
+        what: str,
+        cb: Callable[..., Any] | None,
+        args: Sequence[Any] | None,
+        kwargs: Mapping[str, Any] | None,
+    ) -> tuple[Callable[..., Any], tuple[Any, ...], dict[str, Any]] | None:
+        """Check a user callback, adopt its declared interface, bind its extra arguments."""
+        if cb is None:
+            return None
+        if not callable(cb):
+            raise smach.InvalidStateError(
+                f"{type(self).__name__} {self._ros_name!r}: {what} must be callable, got {cb!r}"
+            )
+        self._adopt_interface(cb)
+        return cb, tuple(args or ()), dict(kwargs or {})
 
     def _preempted(self) -> str:
         self.service_preempt()

@@ -18,7 +18,6 @@ from typing import Any
 import smach
 from smach.ros.executor import seconds
 from smach.ros.ros_state import POLL_PERIOD, RosState
-from smach.util import has_smach_interface
 
 __all__ = ["ServiceState"]
 
@@ -59,7 +58,7 @@ class ServiceState(RosState):
         liveness_period: Any = 0.5,
     ) -> None:
         super().__init__(node, outcomes=[*DEFAULT_OUTCOMES, *(outcomes or ())])
-        self._service_name = service_name
+        self._ros_name = self._service_name = service_name
         self._spec = service_spec
         self._server_wait_timeout = seconds(server_wait_timeout, "server_wait_timeout")
         self._call_timeout = seconds(call_timeout, "call_timeout")
@@ -99,25 +98,6 @@ class ServiceState(RosState):
             service_spec, self._resolved_name, callback_group=helper.callback_group
         )
         self._helper_node: Any = helper.node
-
-    def _callback(
-        self,
-        what: str,
-        cb: Callable[..., Any] | None,
-        args: Sequence[Any] | None,
-        kwargs: Mapping[str, Any] | None,
-    ) -> tuple[Callable[..., Any], tuple[Any, ...], dict[str, Any]] | None:
-        if cb is None:
-            return None
-        if not callable(cb):
-            raise smach.InvalidStateError(
-                f"ServiceState {self._service_name!r}: {what} must be callable, got {cb!r}"
-            )
-        if has_smach_interface(cb):
-            self.register_input_keys(cb.get_registered_input_keys())  # type: ignore[attr-defined]
-            self.register_output_keys(cb.get_registered_output_keys())  # type: ignore[attr-defined]
-            self.register_outcomes(cb.get_registered_outcomes())  # type: ignore[attr-defined]
-        return cb, tuple(args or ()), dict(kwargs or {})
 
     def _ready(self) -> bool:
         return bool(self._client.service_is_ready())

@@ -30,7 +30,6 @@ import smach
 from smach.ros._api import ActionClient, GoalStatus
 from smach.ros.executor import seconds
 from smach.ros.ros_state import RosState
-from smach.util import has_smach_interface
 
 __all__ = ["SimpleActionState"]
 
@@ -95,7 +94,7 @@ class SimpleActionState(RosState):
         liveness_period: Any = 0.5,
     ) -> None:
         super().__init__(node, outcomes=[*DEFAULT_OUTCOMES, *(outcomes or ())])
-        self._action_name = action_name
+        self._ros_name = self._action_name = action_name
         self._spec = action_spec
         self._exec_timeout = seconds(exec_timeout, "exec_timeout")
         self._preempt_timeout: float = (
@@ -148,25 +147,6 @@ class SimpleActionState(RosState):
                 f"SimpleActionState {self._action_name!r}: {what} {unknown} are not fields of "
                 f"{message_type.__name__}; fields: {', '.join(fields) or 'none'}"
             )
-
-    def _callback(
-        self,
-        what: str,
-        cb: Callable[..., Any] | None,
-        args: Sequence[Any] | None,
-        kwargs: Mapping[str, Any] | None,
-    ) -> tuple[Callable[..., Any], tuple[Any, ...], dict[str, Any]] | None:
-        if cb is None:
-            return None
-        if not callable(cb):
-            raise smach.InvalidStateError(
-                f"SimpleActionState {self._action_name!r}: {what} must be callable, got {cb!r}"
-            )
-        if has_smach_interface(cb):
-            self.register_input_keys(cb.get_registered_input_keys())  # type: ignore[attr-defined]
-            self.register_output_keys(cb.get_registered_output_keys())  # type: ignore[attr-defined]
-            self.register_outcomes(cb.get_registered_outcomes())  # type: ignore[attr-defined]
-        return cb, tuple(args or ()), dict(kwargs or {})
 
     # -- running ------------------------------------------------------------------------
     def _server_ready(self) -> bool:
