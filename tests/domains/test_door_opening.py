@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import subprocess
 import sys
 
@@ -12,7 +11,6 @@ from pr2_missions import (
     DOMAINS,
     MemoPlanner,
     load_generator,
-    plan_bridge,
     run_planned,
     run_scripted,
     success_rate,
@@ -114,21 +112,6 @@ def test_runs_are_reproducible_per_seed(planner: MemoPlanner) -> None:
     second = run_planned(target(NAME, SWEEP), 5, 0.2, planner)
     assert first.faults > 0
     assert (first.executed, first.fault_log) == (second.executed, second.fault_log)
-
-
-@pytest.mark.timeout(180)
-def test_plan_bridge_check_passes_and_run_prints_json_results() -> None:
-    check, run = plan_bridge(
-        ["check", f"domains/{NAME}"], ["run", f"domains/{NAME}", "--seed", "1", "--json"]
-    )
-    assert check.returncode == 0, check.stderr
-    assert "OK (3 problem(s) checked)" in check.stdout
-    assert run.returncode in (0, 1), run.stderr
-    data = json.loads(run.stdout)
-    assert data["target"] == NAME and data["seed"] == 1 and data["fail_rate"] == 0.1
-    assert data["goal_reached"] == (run.returncode == 0)
-    for key in ("outcome", "actions_executed", "replans", "planner_calls", "faults_injected"):
-        assert key in data
 
 
 @pytest.mark.timeout(60)

@@ -3,9 +3,6 @@
 from __future__ import annotations
 
 import importlib.util
-import json
-import subprocess
-import sys
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
@@ -14,7 +11,6 @@ from typing import Any
 
 import pytest
 
-from plan_bridge.cli import main as plan_bridge_main
 from plan_bridge.domain import load_task
 from plan_bridge.events import StepFinished
 from plan_bridge.executive import Executive
@@ -24,7 +20,6 @@ from plan_bridge.semantics import ActionModel
 from smach.testing import EventRecorder
 
 DOMAIN = Path(__file__).resolve().parents[2] / "domains" / "table_clearing"
-SCRIPT = Path(sys.executable).with_name("plan-bridge")
 SEEDS = range(20)
 RATES = (0.1, 0.2)
 OUTCOMES = {"succeeded", "aborted", "preempted"}
@@ -264,30 +259,6 @@ def test_a_misplaced_object_is_found_and_the_executive_replans(
 
 
 # -- command line and generator --------------------------------------------------------------
-@pytest.mark.timeout(60)
-def test_check_command_passes(capsys: pytest.CaptureFixture[str]) -> None:
-    assert plan_bridge_main(["check", str(DOMAIN)]) == 0
-    assert "table_clearing: OK (3 problem(s) checked)" in capsys.readouterr().out
-
-
-@pytest.mark.timeout(90)
-@pytest.mark.skipif(not SCRIPT.exists(), reason="console script not installed")
-def test_run_command_prints_json_results() -> None:
-    completed = subprocess.run(
-        [str(SCRIPT), "run", str(DOMAIN), "--seed", "1", "--json"],
-        capture_output=True,
-        text=True,
-        timeout=80,
-        check=False,
-    )
-    assert completed.returncode == 0, completed.stderr
-    assert "Traceback" not in completed.stderr
-    payload = json.loads(completed.stdout)
-    assert payload["target"] == "table_clearing" and payload["seed"] == 1
-    assert payload["goal_reached"] is True and payload["outcome"] == "succeeded"
-    assert "summary: succeeded (goal reached)" in completed.stderr
-
-
 @pytest.mark.timeout(60)
 def test_generator_output_loads_and_solves(
     tmp_path: Path, planner: UPPlanner, capsys: pytest.CaptureFixture[str]

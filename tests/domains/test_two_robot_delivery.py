@@ -3,9 +3,6 @@
 from __future__ import annotations
 
 import importlib.util
-import json
-import subprocess
-import sys
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
@@ -13,7 +10,6 @@ from types import ModuleType
 
 import pytest
 
-from plan_bridge.cli import main as plan_bridge_main
 from plan_bridge.domain import load_task
 from plan_bridge.events import StepFinished
 from plan_bridge.executive import Executive
@@ -23,7 +19,6 @@ from plan_bridge.semantics import ActionModel
 from smach.testing import EventRecorder
 
 DOMAIN = Path(__file__).resolve().parents[2] / "domains" / "two_robot_delivery"
-SCRIPT = Path(sys.executable).with_name("plan-bridge")
 SEEDS = range(20)
 RATES = (0.1, 0.2)
 OUTCOMES = {"succeeded", "aborted", "preempted"}
@@ -239,30 +234,6 @@ def test_scripted_baseline_ends_in_a_defined_outcome(target: Target, rate: float
 
 
 # -- command line and generator --------------------------------------------------------------
-@pytest.mark.timeout(60)
-def test_check_command_passes(capsys: pytest.CaptureFixture[str]) -> None:
-    assert plan_bridge_main(["check", str(DOMAIN)]) == 0
-    assert "two_robot_delivery: OK (3 problem(s) checked)" in capsys.readouterr().out
-
-
-@pytest.mark.timeout(90)
-@pytest.mark.skipif(not SCRIPT.exists(), reason="console script not installed")
-def test_run_command_prints_json_results() -> None:
-    completed = subprocess.run(
-        [str(SCRIPT), "run", str(DOMAIN), "--seed", "1", "--json"],
-        capture_output=True,
-        text=True,
-        timeout=80,
-        check=False,
-    )
-    assert completed.returncode == 0, completed.stderr
-    assert "Traceback" not in completed.stderr
-    payload = json.loads(completed.stdout)
-    assert payload["target"] == "two_robot_delivery" and payload["seed"] == 1
-    assert payload["goal_reached"] is True and payload["outcome"] == "succeeded"
-    assert "_PARALLEL_" in completed.stderr
-
-
 def _generator() -> ModuleType:
     spec = importlib.util.spec_from_file_location("trd_generate", DOMAIN / "generate.py")
     assert spec is not None and spec.loader is not None
