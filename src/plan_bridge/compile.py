@@ -176,9 +176,6 @@ class CompiledPlan:
     step_states: list[StepState]
     layers: list[list[int]] = field(default_factory=list)
 
-    def label_of(self, index: int) -> str:
-        return self.labels[index]
-
 
 def compile_plan(
     steps: Sequence[PlanStep],

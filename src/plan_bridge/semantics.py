@@ -220,9 +220,14 @@ class GroundAction:
             return None
         return frozenset(a(self._binding) for a in atoms)
 
-    def relevant_atoms(self, facts: Facts) -> set[Fact]:
-        """Atoms a skill should report on: STRIPS preconditions and effects."""
-        adds, dels = self.effects(facts)
+    def relevant_atoms(
+        self, facts: Facts, effects: tuple[set[Fact], set[Fact]] | None = None
+    ) -> set[Fact]:
+        """Atoms a skill should report on: STRIPS preconditions and effects.
+
+        Pass ``effects`` when they were computed already for ``facts``.
+        """
+        adds, dels = effects if effects is not None else self.effects(facts)
         return set(self.precondition_atoms() or ()) | adds | dels
 
 
@@ -381,8 +386,3 @@ class ActionModel:
             adds = {e.atom(ground._binding) for e in ground._lifted.effects if e.add}
             needed = (needed - adds) | set(pre)
         return frozenset(needed)
-
-
-def describe(facts: Iterable[Fact]) -> str:
-    """Facts as PDDL text, sorted."""
-    return " ".join(sorted(format_fact(f) for f in facts))

@@ -121,7 +121,7 @@ class SimulatedWorld:
             # of all of them per action.
             state = self._facts
             adds, dels = ground.effects(state)
-            touched = set(ground.precondition_atoms() or ()) | adds | dels
+            touched = ground.relevant_atoms(state, (adds, dels))
             ok = ground.applicable(state)
             if ok and self.fail_rate and self.rng.random() < self.fail_rate:
                 self.inject("action-failed", str(step), "the action had no effect")

@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from plan_bridge.cli import EXIT_BAD_INPUT, EXIT_OK, Command, fail, register
+from smach.introspection.journal import drop_torn_line
 
 __all__ = ["APPROACHES", "RunSpec", "run_one", "run_study", "summarise_results"]
 
@@ -337,15 +338,6 @@ def read_results(path: Path) -> list[dict[str, str]]:
         return [row for row in csv.DictReader(f) if row.get("outcome")]
 
 
-def _drop_torn_line(path: Path) -> None:
-    """A study killed mid-write leaves a partial last line: cut it so the run is redone."""
-    if not path.exists() or path.stat().st_size == 0:
-        return
-    data = path.read_bytes()
-    if not data.endswith(b"\n"):
-        path.write_bytes(data[: data.rfind(b"\n") + 1])
-
-
 def run_study(
     specs: Sequence[RunSpec],
     out: Path,
@@ -357,7 +349,7 @@ def run_study(
     """Run what ``results.csv`` in ``out`` does not have yet; return every requested row."""
     out.mkdir(parents=True, exist_ok=True)
     results_path = out / "results.csv"
-    _drop_torn_line(results_path)
+    drop_torn_line(results_path)
     existing = read_results(results_path)
     done = {_row_key(r) for r in existing}
     todo = [s for s in specs if s.key not in done]

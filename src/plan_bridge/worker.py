@@ -127,8 +127,6 @@ class Worker:
         )
         self._reader.start()
         self._next_id = 0
-        self.started_at = time.monotonic()
-        self.solves = 0
         # Mirror of the worker's cache of parsed problems (same size and order).
         self._bases: OrderedDict[str, None] = OrderedDict()
 
@@ -210,7 +208,6 @@ class Worker:
                     continue
                 break
             self._remember(base.key)
-            self.solves += 1
             return SolveReply(
                 outcome=str(reply["outcome"]),
                 status=str(reply.get("status", "")),

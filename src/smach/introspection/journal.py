@@ -105,7 +105,7 @@ class Journal:
         self.path = Path(path)
         self._lock = threading.Lock()
         if append:
-            _drop_torn_line(self.path)
+            drop_torn_line(self.path)
         self._file: IO[str] | None = self.path.open("a" if append else "w", encoding="utf-8")
         self.events_written = 0
         self._root = root
@@ -175,8 +175,12 @@ class Journal:
         self.close()
 
 
-def _drop_torn_line(path: Path) -> None:
-    """Cut a partial last line (the process died mid-write) before appending."""
+def drop_torn_line(path: Path) -> None:
+    """Cut a partial last line (the process died mid-write) before appending.
+
+    Used for every append-only file a killed process may leave: journals, study
+    results.
+    """
     if not path.exists():
         return
     data = path.read_bytes()
