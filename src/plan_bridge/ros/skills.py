@@ -99,7 +99,9 @@ def ros_skill(
 
     submit = basic_types.Request()
     submit.string_value = text
-    quick = min(server_wait_timeout, 5.0)
+    # Submitting and reading a report are idempotent: a request lost while DDS still
+    # matches a freshly started server is sent again after two seconds.
+    quick = min(server_wait_timeout, 2.0)
     # The report comes from the process that just ran the goal.
     report_wait = min(server_wait_timeout, 2.0)
 
@@ -120,6 +122,7 @@ def ros_skill(
                 response_cb=take_ticket,
                 server_wait_timeout=server_wait_timeout,
                 call_timeout=quick,
+                call_attempts=3,
             ),
             transitions={"succeeded": "RUN", "refused": "aborted"},
         )
@@ -150,6 +153,7 @@ def ros_skill(
                     response_cb=read_result,
                     server_wait_timeout=report_wait,
                     call_timeout=quick,
+                    call_attempts=3,
                 ),
                 transitions={} if final is None else {"succeeded": final},
             )
@@ -190,7 +194,8 @@ def _trigger(node: Any, service: str, timeout: float) -> str:
         trigger,
         response_key="response",
         server_wait_timeout=timeout,
-        call_timeout=timeout,
+        call_timeout=timeout / 3,
+        call_attempts=3,
     )
     ud = smach.UserData()
     try:

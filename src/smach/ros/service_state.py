@@ -1,8 +1,8 @@
 """``ServiceState``: call a ROS 2 service once and map the response to an outcome.
 
 Bounded and preemptable: waiting for the service (``server_wait_timeout`` ->
-``aborted``), and waiting for the response (``call_timeout`` -> ``aborted``; the
-server leaving the ROS graph -> ``aborted``; a preempt -> the pending request is
+``aborted``), and waiting for the response (``call_timeout`` -> ``aborted``, or
+a resend when ``call_attempts`` > 1; the server leaving the ROS graph -> ``aborted``; a preempt -> the pending request is
 abandoned and the state returns ``preempted``: ROS 2 services cannot be cancelled,
 so the server may still carry the request out). Every failure of the user's
 callbacks or of the request building is ``aborted`` with the reason logged (the
@@ -22,13 +22,17 @@ from smach.ros.ros_state import POLL_PERIOD, RosState
 __all__ = ["ServiceState"]
 
 DEFAULT_OUTCOMES = ("succeeded", "aborted", "preempted")
+_NO_ANSWER = object()  # _await_response: the call_timeout passed without an answer
 
 
 class ServiceState(RosState):
     """A state that calls a service.
 
     Signature of the ROS 2 smach_ros (the node first), plus ``server_wait_timeout``,
-    ``call_timeout`` and ``liveness_period``. Callbacks run in the executing thread:
+    ``call_timeout``, ``call_attempts`` and ``liveness_period``. ``call_attempts``
+    sends the request again when no answer came within ``call_timeout`` (for
+    idempotent services: a request or response sent while DDS is still matching a
+    freshly started server can be lost). Callbacks run in the executing thread:
     ``request_cb(ud, request, *args, **kwargs)`` may return a new request;
     ``response_cb(ud, response, *args, **kwargs)`` may return an outcome.
     """
@@ -55,6 +59,7 @@ class ServiceState(RosState):
         *,
         server_wait_timeout: Any = 60.0,
         call_timeout: Any = None,
+        call_attempts: int = 1,
         liveness_period: Any = 0.5,
     ) -> None:
         super().__init__(node, outcomes=[*DEFAULT_OUTCOMES, *(outcomes or ())])
@@ -62,6 +67,16 @@ class ServiceState(RosState):
         self._spec = service_spec
         self._server_wait_timeout = seconds(server_wait_timeout, "server_wait_timeout")
         self._call_timeout = seconds(call_timeout, "call_timeout")
+        if not isinstance(call_attempts, int) or call_attempts < 1:
+            raise smach.InvalidStateError(
+                f"ServiceState {service_name!r}: call_attempts must be an integer >= 1, "
+                f"got {call_attempts!r}"
+            )
+        if call_attempts > 1 and self._call_timeout is None:
+            raise smach.InvalidStateError(
+                f"ServiceState {service_name!r}: call_attempts > 1 needs a call_timeout"
+            )
+        self._call_attempts = call_attempts
         self._liveness_period = seconds(liveness_period, "liveness_period")
         self._request = service_spec.Request() if request is None else request
         self._request_key = request_key
@@ -139,15 +154,31 @@ class ServiceState(RosState):
                 f"the request is a {type(request).__name__}, not a {self._spec.Request.__name__}"
             )
 
-        self._wake.clear()
-        try:
-            future = self._client.call_async(request)
-        except Exception as exc:
+        response: Any = _NO_ANSWER
+        for attempt in range(1, self._call_attempts + 1):
+            self._wake.clear()
+            try:
+                future = self._client.call_async(request)
+            except Exception as exc:
+                return self._fail(
+                    f"calling {self._resolved_name!r} failed: {type(exc).__name__}: {exc}"
+                )
+            future.add_done_callback(lambda _: self._wake.set())
+            response = self._await_response(future)
+            if response is not _NO_ANSWER:
+                break
+            if attempt < self._call_attempts:
+                smach.logwarn(
+                    f"{self.path or 'ServiceState'}: service {self._resolved_name!r} did not "
+                    f"answer within {self._call_timeout} s; sending the request again "
+                    f"(attempt {attempt + 1} of {self._call_attempts})"
+                )
+        if response is _NO_ANSWER:
             return self._fail(
-                f"calling {self._resolved_name!r} failed: {type(exc).__name__}: {exc}"
+                f"service {self._resolved_name!r} did not answer within "
+                f"{self._call_timeout} s (call_timeout)"
+                + (f", {self._call_attempts} attempts" if self._call_attempts > 1 else "")
             )
-        future.add_done_callback(lambda _: self._wake.set())
-        response = self._await_response(future)
         if isinstance(response, str):
             return response
 
@@ -174,7 +205,7 @@ class ServiceState(RosState):
         return str(outcome)
 
     def _await_response(self, future: Any) -> Any:
-        """The response, or the outcome to return instead (a string)."""
+        """The response, the outcome to return instead (a string), or ``_NO_ANSWER``."""
         start = time.monotonic()
         deadline = None if self._call_timeout is None else start + self._call_timeout
         period = self._liveness_period
@@ -187,10 +218,7 @@ class ServiceState(RosState):
             now = time.monotonic()
             if deadline is not None and now >= deadline:
                 self._client.remove_pending_request(future)
-                return self._fail(
-                    f"service {self._resolved_name!r} did not answer within "
-                    f"{self._call_timeout} s (call_timeout)"
-                )
+                return _NO_ANSWER
             if next_check is not None and now >= next_check:
                 next_check = now + (period or POLL_PERIOD)
                 lost = 0 if self._ready() else lost + 1

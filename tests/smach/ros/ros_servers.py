@@ -16,6 +16,7 @@ The caller sets ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST and ROS_DOMAIN_ID.
 from __future__ import annotations
 
 import argparse
+import itertools
 import os
 import sys
 import threading
@@ -84,11 +85,14 @@ def fibonacci(node, name: str, mode: str, step: float) -> object:  # type: ignor
 def setbool(node, name: str, mode: str) -> object:  # type: ignore[no-untyped-def]
     from std_srvs.srv import SetBool
 
+    calls = itertools.count(1)
+
     def handle(request, response):  # type: ignore[no-untyped-def]
+        call = next(calls)
         say("request")
         if mode == "crash":
             os._exit(3)  # a crash: no clean-up, the process leaves the graph by its lease
-        if mode == "slow":
+        if mode == "slow" or (mode == "slow_first" and call == 1):
             time.sleep(30)
         response.success = request.data
         response.message = f"got {request.data}"

@@ -120,6 +120,44 @@ def test_call_timeout_aborts_a_call_that_takes_too_long(ros: Any) -> None:
 
 
 @pytest.mark.timeout(30)
+def test_call_attempts_send_the_request_again_when_no_answer_came(ros: Any) -> None:
+    process = ros.server("setbool", "set_slow_first", "--mode", "slow_first")
+    lines = read_lines(process)
+    state = ServiceState(
+        ros.node("client"),
+        "set_slow_first",
+        SetBool,
+        request=SetBool.Request(data=True),
+        response_key="response",
+        call_timeout=0.5,
+        call_attempts=3,
+    )
+    ud = smach.UserData()
+    assert state.execute(ud) == "succeeded"
+    assert ud.response.message == "got True"
+    assert wait_for(lambda: lines.count("request") == 2, 5)
+
+
+@pytest.mark.timeout(30)
+def test_every_unanswered_attempt_ends_in_aborted(ros: Any, caplog: Any) -> None:
+    process = ros.server("setbool", "set_slow3", "--mode", "slow")
+    lines = read_lines(process)
+    state = ServiceState(
+        ros.node("client"), "set_slow3", SetBool, call_timeout=0.3, call_attempts=2
+    )
+    assert state.execute(smach.UserData()) == "aborted"
+    assert wait_for(lambda: lines.count("request") == 2, 5)
+    assert "did not answer within 0.3 s (call_timeout), 2 attempts" in caplog.text
+
+
+def test_call_attempts_need_a_call_timeout(ros: Any) -> None:
+    with pytest.raises(smach.InvalidStateError, match="needs a call_timeout"):
+        ServiceState(ros.node("client"), "x", SetBool, call_attempts=2)
+    with pytest.raises(smach.InvalidStateError, match="integer >= 1"):
+        ServiceState(ros.node("client2"), "x", SetBool, call_timeout=1, call_attempts=0)
+
+
+@pytest.mark.timeout(30)
 def test_preempt_during_a_call_returns_preempted_at_once(ros: Any) -> None:
     process = ros.server("setbool", "set_slow2", "--mode", "slow")
     lines = read_lines(process)
