@@ -41,6 +41,7 @@ import itertools
 import json
 import os
 import platform
+import re
 import shutil
 import statistics
 import subprocess
@@ -147,7 +148,7 @@ def ours_run(domain: Path, problem: Path, trial: int, planner: Any) -> dict[str,
         copy.write_text(problem.read_text() + f"\n; benchmark trial {trial}\n")
         engine_time: list[float] = []
         started = time.perf_counter()
-        target = load_target(domain, copy)
+        target = load_target(domain, copy, prime=planner.pool)
         loaded = time.perf_counter()
         setup = target.setup(seed=trial, fail_rate=0.0)
         problems = setup.skills.check(target.task)
@@ -438,9 +439,12 @@ def startup_section(runs: int) -> dict[str, Any]:
     try:
         unbalanced = folder / "unbalanced.pddl"
         unbalanced.write_text("(define (problem p) (:domain gripper-strips)\n  (:init (room a)\n")
+        gripper_domain = (BENCH / "gripper" / "domain.pddl").read_text()
         misspelt = folder / "misspelt.pddl"
-        misspelt.write_text(
-            (BENCH / "gripper" / "domain.pddl").read_text().replace(":effect", ":efect", 1)
+        misspelt.write_text(gripper_domain.replace(":effect", ":efect", 1))
+        malformed = folder / "malformed.pddl"
+        malformed.write_text(
+            re.sub(r":parameters\s*\(\?from \?to\)", ":parameters ?from", gripper_domain)
         )
         gripper = BENCH / "gripper"
         cases: list[tuple[str, list[str], int]] = [
@@ -465,8 +469,13 @@ def startup_section(runs: int) -> dict[str, Any]:
                 2,
             ),
             (
-                "plan syntax error found by UP's parser",
+                "plan misspelt keyword (`:efect`)",
                 ["plan", str(misspelt), str(gripper / "prob01.pddl")],
+                2,
+            ),
+            (
+                "plan syntax error found by UP's parser (`:parameters ?from`)",
+                ["plan", str(malformed), str(gripper / "prob01.pddl")],
                 2,
             ),
             (

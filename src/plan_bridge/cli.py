@@ -51,7 +51,14 @@ def register(command: Command) -> Command:
     return command
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
+    """The ``plan-bridge`` parser.
+
+    With ``argv``, only the subcommand it names gets its arguments (configuring
+    ``view`` imports smach): ``plan-bridge --help`` then lists the subcommands
+    without importing any of them. Without ``argv``, every subcommand is configured.
+    """
+    named = None if argv is None else next((a for a in argv if not a.startswith("-")), "")
     # Subcommands live in their own modules, which register them on import.
     from plan_bridge import mission_commands, study, view_command  # noqa: F401
 
@@ -69,13 +76,15 @@ def build_parser() -> argparse.ArgumentParser:
             help=command.help,
             description=command.description or command.help,
         )
-        command.configure(sub)
+        if named is None or named == command.name:
+            command.configure(sub)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``plan-bridge`` console script."""
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(argv)
     args = parser.parse_args(argv)
     command = COMMANDS[args.command]
     try:
@@ -171,18 +180,15 @@ def _run_plan(args: argparse.Namespace) -> int:
     except PlanBridgeError as exc:
         return fail(str(exc))
 
-    from plan_bridge.worker import default_pool
-
-    # Start the planner process now: it imports unified-planning while we parse.
-    default_pool().warm_up(1)
-
     from plan_bridge.domain import load_task
     from plan_bridge.planning import PlanStatus, get_planner
+    from plan_bridge.worker import default_pool
 
     try:
-        planner = get_planner(args.planner)
         progress(f"loading {args.domain} and {args.problem}...")
-        task = load_task(args.domain, args.problem)
+        # A planner process starts now and parses the task while we do.
+        task = load_task(args.domain, args.problem, prime=default_pool())
+        planner = get_planner(args.planner)
     except PlanBridgeError as exc:
         return fail(str(exc))
     progress(f"planning with {planner.name} (timeout {args.timeout:g} s)...")

@@ -19,7 +19,7 @@ import warnings
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 from plan_bridge.errors import FactError, PddlError
 from plan_bridge.source import (
@@ -32,6 +32,9 @@ from plan_bridge.source import (
     replace_init,
 )
 from plan_bridge.up_runtime import ensure_unified_planning
+
+if TYPE_CHECKING:
+    from plan_bridge.worker import WorkerPool
 
 __all__ = [
     "ActionSchema",
@@ -248,17 +251,24 @@ def load_task(
     *,
     max_bytes: int = DEFAULT_MAX_BYTES,
     max_depth: int = DEFAULT_MAX_DEPTH,
+    prime: WorkerPool | None = None,
 ) -> PlanningTask:
     """Load a PDDL domain and problem file.
 
     Raises :class:`PddlError` (or its subclass :class:`UnsupportedFeatureError`)
     with file, line, column and the offending text for anything that cannot be
     loaded; never a parser traceback.
+
+    ``prime``: a planner worker pool (e.g. ``default_pool()``) that starts parsing
+    the same text in a planner process while this process parses it, so the first
+    solve does not parse again (:meth:`WorkerPool.prime`). Pass it when the task
+    will be planned.
     """
     domain_source = read_source(domain, "domain", max_bytes=max_bytes)
     check_source(domain_source, max_depth=max_depth)
     problem_source = read_source(problem, "problem", max_bytes=max_bytes)
     check_source(problem_source, max_depth=max_depth)
+    _prime(prime, domain_source, problem_source)
     up_problem, notes = _parse(domain_source, problem_source)
     task = task_from_problem(
         up_problem, domain_path=Path(domain), problem_path=Path(problem), warnings=notes
@@ -275,17 +285,26 @@ def load_task_from_text(
     domain_name: str = "<domain>",
     problem_name: str = "<problem>",
     max_depth: int = DEFAULT_MAX_DEPTH,
+    prime: WorkerPool | None = None,
 ) -> PlanningTask:
     """Like :func:`load_task` for PDDL held in strings (names are used in errors)."""
     domain_source = decode_source(domain_text.encode("utf-8"), domain_name, "domain")
     check_source(domain_source, max_depth=max_depth)
     problem_source = decode_source(problem_text.encode("utf-8"), problem_name, "problem")
     check_source(problem_source, max_depth=max_depth)
+    _prime(prime, domain_source, problem_source)
     up_problem, notes = _parse(domain_source, problem_source)
     task = task_from_problem(up_problem, warnings=notes)
     return dataclasses.replace(
         task, domain_text=domain_source.text, problem_text=problem_source.text
     )
+
+
+def _prime(pool: WorkerPool | None, domain: SourceText, problem: SourceText) -> None:
+    if pool is not None:
+        from plan_bridge.worker import ProblemText
+
+        pool.prime(ProblemText.of(domain.text, problem.text))
 
 
 def task_from_problem(

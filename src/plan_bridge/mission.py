@@ -23,12 +23,15 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import ModuleType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from plan_bridge.domain import PlanningTask, load_task
 from plan_bridge.errors import PlanBridgeError
 from plan_bridge.simulation import SimulatedWorld, symbolic_skills
 from plan_bridge.skills import SkillRegistry
+
+if TYPE_CHECKING:
+    from plan_bridge.worker import WorkerPool
 
 __all__ = ["MissionSetup", "ScriptedMission", "Target", "TargetError", "load_target"]
 
@@ -102,8 +105,14 @@ class Target:
         return result
 
 
-def load_target(target: str | Path, problem: str | Path | None = None) -> Target:
-    """Load a domain folder or a domain.pddl (then ``problem`` is required)."""
+def load_target(
+    target: str | Path, problem: str | Path | None = None, *, prime: WorkerPool | None = None
+) -> Target:
+    """Load a domain folder or a domain.pddl (then ``problem`` is required).
+
+    ``prime``: a planner worker pool that parses the task in parallel (see
+    :func:`~plan_bridge.domain.load_task`).
+    """
     path = Path(target)
     if not path.exists():
         raise TargetError(
@@ -121,12 +130,12 @@ def load_target(target: str | Path, problem: str | Path | None = None) -> Target
             problem_path = problems[0]
         else:
             problem_path = _problem_path(Path(problem), path)
-        task = load_task(domain, problem_path)
+        task = load_task(domain, problem_path, prime=prime)
         return Target(path.name, domain, problem_path, task, path, _load_module(path))
     if problem is None:
         raise TargetError(f"{path}: a bare domain file needs --problem PROBLEM.pddl")
     problem_path = Path(problem)
-    task = load_task(path, problem_path)
+    task = load_task(path, problem_path, prime=prime)
     name = path.parent.name if path.stem == "domain" and path.parent.name else path.stem
     return Target(name, path, problem_path, task)
 

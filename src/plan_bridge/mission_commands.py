@@ -134,10 +134,15 @@ def _configure_run(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def _load(args: argparse.Namespace) -> Target:
+def _load(args: argparse.Namespace, *, to_plan: bool = False) -> Target:
     from plan_bridge.mission import load_target
 
-    return load_target(args.target, args.problem)
+    if not to_plan:
+        return load_target(args.target, args.problem)
+    from plan_bridge.worker import default_pool
+
+    # A planner process parses the task while we do (see WorkerPool.prime).
+    return load_target(args.target, args.problem, prime=default_pool())
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -243,7 +248,7 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
         )
     except ValueError as exc:
         return fail(str(exc))
-    target = _load(args)
+    target = _load(args, to_plan=True)
     symbolic = target.module is None or not hasattr(target.module, "setup")
     fail_rate = (
         args.fail_rate if args.fail_rate is not None else (0.0 if symbolic else DEFAULT_FAIL_RATE)

@@ -13,6 +13,7 @@ ourselves. None of this imports unified-planning, so bad input fails fast.
 from __future__ import annotations
 
 import bisect
+import difflib
 import re
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
@@ -71,6 +72,49 @@ _KNOWN_UNSUPPORTED_REQUIREMENTS = {
 }
 
 _TOKEN = re.compile(r";[^\n]*|\(|\)|[^\s();]+")
+
+#: Section keywords of each kind of file (PDDL 1.2 to 3.1, PDDL+ and HTN).
+_SECTIONS = {
+    "domain": frozenset(
+        [
+            ":requirements",
+            ":types",
+            ":constants",
+            ":predicates",
+            ":functions",
+            ":action",
+            ":durative-action",
+            ":derived",
+            ":constraints",
+            ":process",
+            ":event",
+            ":task",
+            ":method",
+            ":extends",
+            ":timeless",
+        ]
+    ),
+    "problem": frozenset(
+        [
+            ":domain",
+            ":requirements",
+            ":objects",
+            ":init",
+            ":goal",
+            ":constraints",
+            ":metric",
+            ":htn",
+            ":length",
+            ":situation",
+        ]
+    ),
+}
+
+#: The keywords an action's definition may use.
+_ACTION_KEYWORDS = {
+    ":action": (":parameters", ":precondition", ":effect"),
+    ":durative-action": (":parameters", ":duration", ":condition", ":effect"),
+}
 
 
 @dataclass(frozen=True)
@@ -260,6 +304,7 @@ def check_source(source: SourceText, *, max_depth: int = DEFAULT_MAX_DEPTH) -> N
         )
     _check_parentheses(source, max_depth)
     _check_header(source)
+    _check_keywords(source)
     _check_constructs(source)
 
 
@@ -323,6 +368,56 @@ def _check_header(source: SourceText) -> None:
             tokens[3].offset,
             hint="pass the domain file first and the problem file second",
         )
+
+
+def _check_keywords(source: SourceText) -> None:
+    """Section keywords, and the keywords of every action: a misspelt one gets its
+    name, place and the allowed ones (unified-planning would say ``Expected ')'``)."""
+    tokens = source.tokens
+    allowed_sections = _SECTIONS[source.kind]
+    depth = 0
+    keywords: tuple[str, ...] = ()
+    where = ""
+    for index, token in enumerate(tokens):
+        if token.text == "(":
+            depth += 1
+            if depth == 2 and index + 1 < len(tokens):
+                head = tokens[index + 1]
+                keywords = ()
+                if head.text in {"domain", "problem"} and index == 2:
+                    continue
+                if head.text not in allowed_sections:
+                    raise source.error(
+                        f"unknown {source.kind} section {head.text!r}"
+                        + _did_you_mean(head.text, allowed_sections),
+                        head.offset,
+                        hint=f"a {source.kind} file has the sections "
+                        + " ".join(sorted(allowed_sections)),
+                    )
+                if head.text in _ACTION_KEYWORDS and index + 2 < len(tokens):
+                    keywords = _ACTION_KEYWORDS[head.text]
+                    where = f"({head.text} {tokens[index + 2].text} ...)"
+        elif token.text == ")":
+            depth -= 1
+        elif (
+            depth == 2
+            and keywords
+            and token.text.startswith(":")
+            and token.text not in keywords
+            and tokens[index - 1].text != "("  # the section's own keyword
+        ):
+            raise source.error(
+                f"unknown keyword {token.text!r} in {where}" + _did_you_mean(token.text, keywords),
+                token.offset,
+                hint=f"({where.split()[0][1:]} NAME ...) takes "
+                + ", ".join(keywords[:-1])
+                + f" and {keywords[-1]}",
+            )
+
+
+def _did_you_mean(word: str, choices: Iterable[str]) -> str:
+    close = difflib.get_close_matches(word, list(choices), n=1, cutoff=0.6)
+    return f" (did you mean {close[0]}?)" if close else ""
 
 
 def _check_constructs(source: SourceText) -> None:

@@ -28,7 +28,6 @@ from pathlib import Path
 from typing import Any
 
 from plan_bridge.cli import EXIT_BAD_INPUT, EXIT_OK, Command, fail, register
-from smach.introspection.journal import drop_torn_line
 
 __all__ = ["APPROACHES", "RunSpec", "run_one", "run_study", "summarise_results"]
 
@@ -113,10 +112,11 @@ _targets: dict[tuple[str, str], Any] = {}
 
 def _target(path: str, problem: str) -> Any:
     from plan_bridge.mission import load_target
+    from plan_bridge.worker import default_pool
 
     key = (path, problem)
     if key not in _targets:
-        _targets[key] = load_target(path, problem or None)
+        _targets[key] = load_target(path, problem or None, prime=default_pool())
     return _targets[key]
 
 
@@ -347,6 +347,8 @@ def run_study(
     progress: Any = None,
 ) -> list[dict[str, str]]:
     """Run what ``results.csv`` in ``out`` does not have yet; return every requested row."""
+    from smach.introspection.journal import drop_torn_line
+
     out.mkdir(parents=True, exist_ok=True)
     results_path = out / "results.csv"
     drop_torn_line(results_path)

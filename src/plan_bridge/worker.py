@@ -27,6 +27,11 @@ which costs up to ~1.5 s on large problems. The PDDL text is only sent when the
 worker has not seen the key yet (the client mirrors each worker's cache, and a
 worker that does not know the key answers ``missing-base``, upon which the text
 is sent within the same deadline).
+
+**The first parse overlaps the client's.** :meth:`WorkerPool.prime` hands a
+problem's text to an idle worker without waiting (``load_task(..., prime=pool)``
+does it before parsing the same text itself), so the worker parses while this
+process parses, on the other core, and the first solve finds the parse ready.
 """
 
 from __future__ import annotations
@@ -127,6 +132,8 @@ class Worker:
         )
         self._reader.start()
         self._next_id = 0
+        # Requests are written whole, one at a time (a prime writes from its own thread).
+        self._write_lock = threading.Lock()
         # Mirror of the worker's cache of parsed problems (same size and order).
         self._bases: OrderedDict[str, None] = OrderedDict()
 
@@ -164,6 +171,43 @@ class Worker:
     def knows(self, key: str) -> bool:
         """Whether this worker (probably) holds the parse of base problem ``key``."""
         return key in self._bases
+
+    def prime(self, base: ProblemText) -> None:
+        """Have the worker parse ``base`` into its cache; returns at once.
+
+        The request is written from a short-lived thread: the worker reads its
+        input only once unified-planning is imported, and a large problem's text
+        does not fit in the pipe's buffer. The reply (``parsed`` or an error) is
+        skipped by the next exchange; if the parse failed, the next solve gets
+        ``missing-base`` and sends the text again.
+        """
+        self._next_id += 1
+        line = json.dumps(
+            {
+                "op": "parse",
+                "id": self._next_id,
+                "base": base.key,
+                "domain": base.domain,
+                "problem": base.problem,
+            }
+        )
+        self._remember(base.key)
+        # Take the lock before the thread starts, so that a request sent after this
+        # call is written after the parse request.
+        self._write_lock.acquire()
+        threading.Thread(
+            target=self._write_and_release, args=(line,), name="plan-bridge-prime", daemon=True
+        ).start()
+
+    def _write_and_release(self, line: str) -> None:
+        try:
+            stdin = self.process.stdin
+            assert stdin is not None
+            with contextlib.suppress(OSError, ValueError):
+                stdin.write(line + "\n")
+                stdin.flush()
+        finally:
+            self._write_lock.release()
 
     def solve(
         self,
@@ -239,11 +283,21 @@ class Worker:
         request_id = request["id"] = self._next_id
         stdin = self.process.stdin
         assert stdin is not None
+        line = json.dumps(request) + "\n"
+        if not self._write_lock.acquire(timeout=max(0.0, deadline - time.monotonic())):
+            self.kill()
+            return SolveReply(
+                "timeout",
+                message=f"no answer within {timeout:g} s: killed the planner process",
+                engine_time_s=time.monotonic() - started,
+            )
         try:
-            stdin.write(json.dumps(request) + "\n")
+            stdin.write(line)
             stdin.flush()
         except (OSError, ValueError):
             return SolveReply("crashed", message=self._crash_message())
+        finally:
+            self._write_lock.release()
         while True:
             try:
                 reply = self._replies.get(timeout=max(0.0, deadline - time.monotonic()))
@@ -324,6 +378,35 @@ class WorkerPool:
             while len(self._idle) < count and self._count < self.max_workers:
                 self._idle.append(Worker())
                 self._count += 1
+
+    def prime(self, base: ProblemText) -> None:
+        """Start parsing ``base`` in an idle worker (starting one if the pool may),
+        without waiting; later solves of ``base`` prefer that worker. Does nothing
+        when a worker already holds it or every worker is busy."""
+        with self._condition:
+            if self._closed:
+                return
+            self._idle = [w for w in self._idle if w.is_alive() or self._forget(w)]
+            if any(w.knows(base.key) for w in self._idle):
+                return
+            fresh = [w for w in self._idle if not w._bases]
+            if fresh:
+                worker = fresh[-1]
+            elif self._count < self.max_workers:
+                worker = Worker()
+                self._idle.append(worker)
+                self._count += 1
+            elif self._idle:
+                worker = self._idle[-1]
+            else:
+                return
+            worker.prime(base)
+
+    def _forget(self, worker: Worker) -> bool:
+        """Account for a dead idle worker (call with the condition held); False."""
+        self._count -= 1
+        worker.kill()
+        return False
 
     @contextlib.contextmanager
     def worker(self, prefer: str | None = None) -> Any:
@@ -433,6 +516,12 @@ def serve(requests: IO[str], replies: IO[str]) -> None:
         if not line.strip():
             continue
         request = json.loads(line)
+        if request.get("op") == "parse":
+            reply = _parse_request(reader, request)
+            reply["id"] = request["id"]
+            replies.write(json.dumps(reply) + "\n")
+            replies.flush()
+            continue
         try:
             os.chdir(request["workdir"])
             reply = _solve_request(reader, request)
@@ -517,26 +606,44 @@ def _conjunctive_goal(goals: Iterable[Any]) -> list[tuple[str, ...]] | None:
 _bases: OrderedDict[str, _Base] = OrderedDict()
 
 
+def _parse_base(reader: Any, request: dict[str, Any]) -> float:
+    """Parse the request's text into the cache under its key: the time it took."""
+    import warnings
+
+    started = time.monotonic()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the client reported them when it loaded the task
+        base = _Base(reader.parse_problem_string(request["domain"], request["problem"]))
+    _bases[request["base"]] = base
+    while len(_bases) > BASE_CACHE_SIZE:
+        _bases.popitem(last=False)
+    return time.monotonic() - started
+
+
+def _parse_request(reader: Any, request: dict[str, Any]) -> dict[str, Any]:
+    if request["base"] in _bases:
+        _bases.move_to_end(request["base"])
+        return {"outcome": "parsed", "parse_time_s": 0.0}
+    try:
+        return {"outcome": "parsed", "parse_time_s": _parse_base(reader, request)}
+    except Exception as exc:
+        # The client parses the same text and reports the error properly.
+        return {"outcome": "error", "error_type": type(exc).__name__, "message": str(exc)}
+
+
 def _solve_request(reader: Any, request: dict[str, Any]) -> dict[str, Any]:
     import warnings
 
     from unified_planning.shortcuts import OneshotPlanner  # type: ignore[import-untyped]
 
     key = request["base"]
-    base = _bases.get(key)
-    reused = base is not None
+    reused = key in _bases
     parse_time = 0.0
-    if base is None:
+    if not reused:
         if request.get("domain") is None or request.get("problem") is None:
             return {"outcome": "missing-base"}
-        parse_started = time.monotonic()
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # the client reported them when it loaded the task
-            base = _Base(reader.parse_problem_string(request["domain"], request["problem"]))
-        parse_time = time.monotonic() - parse_started
-        _bases[key] = base
-        while len(_bases) > BASE_CACHE_SIZE:
-            _bases.popitem(last=False)
+        parse_time = _parse_base(reader, request)
+    base = _bases[key]
     _bases.move_to_end(key)
     started = time.monotonic()
     with warnings.catch_warnings(record=True) as caught:

@@ -216,8 +216,27 @@ def test_derived_predicates_are_an_unsupported_feature(tmp_path: Path) -> None:
     assert error.feature == ":derived-predicates"
 
 
-def test_misspelt_keyword_is_a_located_syntax_error(tmp_path: Path) -> None:
+def test_misspelt_action_keyword_is_named_with_a_suggestion(tmp_path: Path) -> None:
     error = _load_bad_domain(tmp_path, DOORS_DOMAIN.replace(":effect (open", ":efect (open"))
+    assert error.explanation == (
+        "unknown keyword ':efect' in (:action unlock ...) (did you mean :effect?)"
+    )
+    assert (error.line, error.column) == (14, 5)
+    assert "^" in error.excerpt
+    assert error.hint == "(:action NAME ...) takes :parameters, :precondition and :effect"
+
+
+def test_misspelt_section_is_named_with_the_allowed_ones(tmp_path: Path) -> None:
+    error = _load_bad_domain(tmp_path, DOORS_DOMAIN.replace("(:predicates", "(:predicate"))
+    assert error.explanation == "unknown domain section ':predicate' (did you mean :predicates?)"
+    assert error.line == 5
+    assert ":constants" in error.hint and ":durative-action" in error.hint
+
+
+def test_syntax_error_only_the_pddl_parser_finds_is_located(tmp_path: Path) -> None:
+    error = _load_bad_domain(
+        tmp_path, DOORS_DOMAIN.replace(":parameters (?k - key ?r - room)", ":parameters ?k")
+    )
     assert "PDDL syntax error" in error.explanation
     assert error.line is not None and 10 <= error.line <= 14
     assert error.excerpt
