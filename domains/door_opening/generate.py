@@ -15,6 +15,8 @@ import random
 import sys
 from collections.abc import Sequence
 
+from plan_bridge.problem_writer import both_ways, generator_main, pddl_problem
+
 
 def room(row: int, col: int) -> str:
     return f"room-{row}-{col}"
@@ -40,23 +42,24 @@ def problem_text(*, rows: int, cols: int, doors: int | None, seed: int) -> str:
             door = f"door-{a.removeprefix('room-')}-{b.removeprefix('room-')}"
             door_names.append(door)
             init += [
-                f"(door-between {door} {a} {b})",
-                f"(door-between {door} {b} {a})",
+                *both_ways(a, b, f"door-between {door}"),
                 f"(door-closed {door})",
                 f"(unlocked {door})",
             ]
         else:
-            init += [f"(passage {a} {b})", f"(passage {b} {a})"]
+            init += both_ways(a, b, "passage")
     rooms = [room(r, c) for r in range(1, rows + 1) for c in range(1, cols + 1)]
-    lines = "\n         ".join(init)
-    doors_decl = f"\n            {' '.join(door_names)} - door" if door_names else ""
-    return (
-        f"; generated: --rows {rows} --cols {cols} --doors {count} --seed {seed}\n"
-        f"(define (problem door-opening-{rows}x{cols}-s{seed})\n"
-        "  (:domain door-opening)\n"
-        f"  (:objects pr2 - robot\n            {' '.join(rooms)} - room{doors_decl})\n"
-        f"  (:init {lines})\n"
-        f"  (:goal (and (at pr2 {room(rows, cols)}))))\n"
+    objects = ["pr2 - robot", f"{' '.join(rooms)} - room"]
+    if door_names:
+        objects.append(f"{' '.join(door_names)} - door")
+    return pddl_problem(
+        f"door-opening-{rows}x{cols}-s{seed}",
+        "door-opening",
+        objects=objects,
+        init=init,
+        goal=[f"(at pr2 {room(rows, cols)})"],
+        comment=f"generated: --rows {rows} --cols {cols} --doors {count} --seed {seed}",
+        compact=True,
     )
 
 
@@ -66,13 +69,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--cols", type=int, default=3)
     parser.add_argument("--doors", type=int, default=None, help="joints with a door (default all)")
     parser.add_argument("--seed", type=int, default=0)
-    args = parser.parse_args(argv)
-    try:
-        text = problem_text(rows=args.rows, cols=args.cols, doors=args.doors, seed=args.seed)
-    except ValueError as exc:
-        parser.error(str(exc))
-    sys.stdout.write(text)
-    return 0
+    return generator_main(
+        parser,
+        lambda args: problem_text(rows=args.rows, cols=args.cols, doors=args.doors, seed=args.seed),
+        argv,
+    )
 
 
 if __name__ == "__main__":

@@ -22,40 +22,14 @@ attempts, ends the mission ``aborted``. The machine::
 
 from __future__ import annotations
 
-from collections import deque
-
 import smach
 from plan_bridge.domain import PlanningTask
 from plan_bridge.mission import ScriptedMission
 
 from .skills import cross_behaviour, open_door_behaviour, pass_door_behaviour
-from .world import DoorWorld
+from .world import DoorWorld, Joint
 
-__all__ = ["follow_route", "route_through", "scripted"]
-
-Joint = tuple[str, str, str | None]
-"""(from room, to room, door or None for a passage)."""
-
-
-def route_through(
-    world: DoorWorld, start: str, goal: str, avoid_doors: set[str] | None = None
-) -> list[Joint] | None:
-    """The route with the fewest joints on the building plan, or None."""
-    previous: dict[str, Joint | None] = {start: None}
-    queue = deque([start])
-    while queue:
-        here = queue.popleft()
-        if here == goal:
-            route: list[Joint] = []
-            while (joint := previous[here]) is not None:
-                route.append(joint)
-                here = joint[0]
-            return route[::-1]
-        for there, door in world.exits(here, avoid_doors):
-            if there not in previous:
-                previous[there] = (here, there, door)
-                queue.append(there)
-    return None
+__all__ = ["follow_route", "scripted"]
 
 
 def follow_route(world: DoorWorld, route: list[Joint] | None) -> smach.Iterator:
@@ -136,10 +110,8 @@ def scripted(
     world = DoorWorld(task, seed=seed, fail_rate=fail_rate, variant=variant)
     robot = next(f[1] for f in task.initial_facts if f[0] == "at")
     goal = world.goal_rooms[0]
-    route = route_through(world, world.start, goal)
-    detour = route_through(
-        world, world.start, goal, avoid_doors={j[2] for j in route or [] if j[2]}
-    )
+    route = world.joints(world.start, goal)
+    detour = world.joints(world.start, goal, avoid_doors={j[2] for j in route or [] if j[2]})
     mission = smach.StateMachine(outcomes=["succeeded", "aborted", "preempted"])
     mission.userdata.robot = robot
     mission.userdata.observations = {}

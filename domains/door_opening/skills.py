@@ -12,11 +12,12 @@ registry maps to ``aborted``; the executive then plans a route around the door.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 
 import smach
 from plan_bridge.domain import PlanningTask
 from plan_bridge.mission import MissionSetup
+from plan_bridge.skill_kit import SKILL_OUTCOMES, Report, WorldCall, fact, observe, skill_machine
 from plan_bridge.skills import SkillRegistry
 
 from .world import DoorWorld
@@ -29,53 +30,12 @@ __all__ = [
     "setup",
 ]
 
-SKILL_OUTCOMES = ["succeeded", "aborted", "preempted"]
 OPEN_ATTEMPTS = 3
 
 
-def fact(*words: str) -> str:
-    return "(" + " ".join(words) + ")"
-
-
-class WorldCall(smach.State):
-    """A state that calls one world method and names the result."""
-
-    def __init__(
-        self,
-        call: Callable[[smach.UserData], bool],
-        *,
-        ok: str,
-        failed: str,
-        input_keys: list[str],
-    ) -> None:
-        super().__init__(outcomes=[ok, failed, "preempted"], input_keys=input_keys)
-        self.call = call
-        self.ok = ok
-        self.failed = failed
-
-    def execute(self, ud: smach.UserData) -> str:
-        if self.preempt_requested():
-            self.service_preempt()
-            return "preempted"
-        return self.ok if self.call(ud) else self.failed
-
-
-class Report(smach.State):
-    """Add observations (computed from userdata) and return ``outcome``."""
-
-    def __init__(
-        self,
-        observe: Callable[[smach.UserData], Mapping[str, bool]],
-        outcome: str,
-        input_keys: list[str],
-    ) -> None:
-        super().__init__(outcomes=[outcome], input_keys=input_keys, io_keys=["observations"])
-        self.observe = observe
-        self.outcome = outcome
-
-    def execute(self, ud: smach.UserData) -> str:
-        ud.observations = {**ud.observations, **self.observe(ud)}
-        return self.outcome
+def _door_call(call: Callable[[str], bool], *, ok: str, failed: str) -> WorldCall:
+    """One call on the door in userdata ``door``: ``ok`` if it worked, else ``failed``."""
+    return WorldCall(lambda ud: call(ud.door), ok=ok, failed=failed, input_keys=["door"])
 
 
 class ReleaseHandle(smach.State):
@@ -99,11 +59,9 @@ class CheckDoor(smach.State):
 
     def execute(self, ud: smach.UserData) -> str:
         is_open = self.world.holds("door-open", ud.door)
-        ud.observations = {
-            **ud.observations,
-            fact("door-open", ud.door): is_open,
-            fact("door-closed", ud.door): not is_open,
-        }
+        observe(
+            ud, (fact("door-open", ud.door), is_open), (fact("door-closed", ud.door), not is_open)
+        )
         return "open" if is_open else "closed"
 
 
@@ -115,32 +73,17 @@ def open_attempt(world: DoorWorld) -> smach.StateMachine:
     with attempt:
         smach.StateMachine.add(
             "GRASP_HANDLE",
-            WorldCall(
-                lambda ud: world.grasp_handle(ud.door),
-                ok="grasped",
-                failed="slipped",
-                input_keys=["door"],
-            ),
+            _door_call(world.grasp_handle, ok="grasped", failed="slipped"),
             {"grasped": "TURN_HANDLE", "slipped": "failed"},
         )
         smach.StateMachine.add(
             "TURN_HANDLE",
-            WorldCall(
-                lambda ud: world.turn_handle(ud.door),
-                ok="turned",
-                failed="latched",
-                input_keys=["door"],
-            ),
+            _door_call(world.turn_handle, ok="turned", failed="latched"),
             {"turned": "PUSH_DOOR", "latched": "RELEASE_LOCKED"},
         )
         smach.StateMachine.add(
             "PUSH_DOOR",
-            WorldCall(
-                lambda ud: world.push_door(ud.door),
-                ok="opened",
-                failed="stuck",
-                input_keys=["door"],
-            ),
+            _door_call(world.push_door, ok="opened", failed="stuck"),
             {"stuck": "RELEASE_STUCK"},
         )
         smach.StateMachine.add("RELEASE_STUCK", ReleaseHandle(world), {"released": "failed"})
@@ -165,12 +108,7 @@ def open_door_behaviour(world: DoorWorld) -> smach.StateMachine:
     with sm:
         smach.StateMachine.add(
             "FIND_HANDLE",
-            WorldCall(
-                lambda ud: world.find_handle(ud.door),
-                ok="found",
-                failed="missing",
-                input_keys=["door"],
-            ),
+            _door_call(world.find_handle, ok="found", failed="missing"),
             {"found": "OPEN", "missing": "failed"},
         )
         smach.StateMachine.add(
@@ -238,16 +176,8 @@ def cross_behaviour(world: DoorWorld) -> smach.State:
 # -- skills: the behaviours with their arguments preset from the plan step ------------------
 
 
-def _skill_machine(outcomes: list[str], **userdata: object) -> smach.StateMachine:
-    sm = smach.StateMachine(outcomes=outcomes, output_keys=["observations"])
-    for key, value in userdata.items():
-        sm.userdata[key] = value
-    sm.userdata.observations = {}
-    return sm
-
-
 def move_skill(world: DoorWorld, robot: str, origin: str, destination: str) -> smach.StateMachine:
-    sm = _skill_machine(SKILL_OUTCOMES, robot=robot, from_room=origin, to_room=destination)
+    sm = skill_machine(bind={"robot": robot, "from_room": origin, "to_room": destination})
     with sm:
         smach.StateMachine.add(
             "CROSS", cross_behaviour(world), {"crossed": "succeeded", "failed": "aborted"}
@@ -257,7 +187,7 @@ def move_skill(world: DoorWorld, robot: str, origin: str, destination: str) -> s
 
 def open_door_skill(world: DoorWorld, robot: str, door: str) -> smach.StateMachine:
     """OPEN_DOOR; its ``locked`` outcome is mapped to ``aborted`` by the registry."""
-    sm = _skill_machine([*SKILL_OUTCOMES, "locked"], robot=robot, door=door)
+    sm = skill_machine(bind={"robot": robot, "door": door}, outcomes=[*SKILL_OUTCOMES, "locked"])
     with sm:
         smach.StateMachine.add(
             "OPEN_DOOR",
@@ -270,8 +200,8 @@ def open_door_skill(world: DoorWorld, robot: str, door: str) -> smach.StateMachi
 def pass_door_skill(
     world: DoorWorld, robot: str, door: str, origin: str, destination: str
 ) -> smach.StateMachine:
-    sm = _skill_machine(
-        SKILL_OUTCOMES, robot=robot, door=door, from_room=origin, to_room=destination
+    sm = skill_machine(
+        bind={"robot": robot, "door": door, "from_room": origin, "to_room": destination}
     )
     with sm:
         smach.StateMachine.add(

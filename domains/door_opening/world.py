@@ -19,12 +19,11 @@ success rates measure recovery. Simulated durations advance ``sim_time``.
 
 from __future__ import annotations
 
-from collections import deque
-
 from plan_bridge.domain import PlanningTask
 from plan_bridge.simulation import SimulatedWorld
+from plan_bridge.skill_kit import fewest_hops
 
-__all__ = ["DoorWorld"]
+__all__ = ["DoorWorld", "Joint"]
 
 FAULT_SCALE = {
     "door-locked": 1.5,
@@ -39,16 +38,20 @@ VARIANTS = ("", "unanticipated")
 
 ROOM_CROSSING = 8.0  # s to cross a room to the next door or passage
 
+Joint = tuple[str, str, str | None]
+"""(from room, to room, door or None for a passage)."""
+
 
 class DoorWorld(SimulatedWorld):
     """Rooms joined by doors and passages; some doors are really locked."""
 
+    fault_scale = FAULT_SCALE
+    variants = VARIANTS
+
     def __init__(
         self, task: PlanningTask, *, seed: int | None = 0, fail_rate: float = 0.0, variant: str = ""
     ) -> None:
-        if variant not in VARIANTS:
-            raise ValueError(f"unknown variant {variant!r}; variants: {', '.join(VARIANTS)}")
-        super().__init__(task, seed=seed, fail_rate=fail_rate)
+        super().__init__(task, seed=seed, fail_rate=fail_rate, variant=variant)
         facts = task.initial_facts
         self.doors: dict[str, tuple[str, str]] = {}
         for f in sorted(facts):
@@ -62,15 +65,9 @@ class DoorWorld(SimulatedWorld):
         if variant == "unanticipated":
             self._lock_route_and_detour()
 
-    def fault(self, kind: str) -> bool:
-        """Draw whether a fault of ``kind`` happens now (always False at fail_rate 0)."""
-        if not self.fail_rate:
-            return False
-        return self.rng.random() < min(1.0, FAULT_SCALE[kind] * self.fail_rate)
-
     def _lock_doors(self) -> None:
         for door in sorted(self.doors):
-            if not self.fault("door-locked"):
+            if not self.chance("door-locked"):
                 continue
             if not all(
                 self.reachable(self.start, g, self.locked | {door}) for g in self.goal_rooms
@@ -82,23 +79,8 @@ class DoorWorld(SimulatedWorld):
 
     def route(self, avoid_doors: set[str]) -> list[str] | None:
         """Doors on the route with the fewest joints to the first goal room, or None."""
-        goal = self.goal_rooms[0]
-        previous: dict[str, tuple[str, str | None] | None] = {self.start: None}
-        queue = deque([self.start])
-        while queue:
-            here = queue.popleft()
-            if here == goal:
-                doors = []
-                while (step := previous[here]) is not None:
-                    here, door = step
-                    if door:
-                        doors.append(door)
-                return doors[::-1]
-            for there, door in self.exits(here, avoid_doors):
-                if there not in previous:
-                    previous[there] = (here, door)
-                    queue.append(there)
-        return None
+        joints = self.joints(self.start, self.goal_rooms[0], avoid_doors)
+        return None if joints is None else [door for _, _, door in joints if door]
 
     def _lock_route_and_detour(self) -> None:
         """A second locked door, on the detour too: what the scripted author did not expect."""
@@ -116,17 +98,13 @@ class DoorWorld(SimulatedWorld):
                     break
 
     def reachable(self, start: str, goal: str, locked: set[str]) -> bool:
-        seen = {start}
-        queue = deque([start])
-        while queue:
-            here = queue.popleft()
-            if here == goal:
-                return True
-            for there, _ in self.exits(here, avoid_doors=locked):
-                if there not in seen:
-                    seen.add(there)
-                    queue.append(there)
-        return False
+        return self.joints(start, goal, locked) is not None
+
+    def joints(
+        self, start: str, goal: str, avoid_doors: set[str] | None = None
+    ) -> list[Joint] | None:
+        """The route with the fewest joints on the building's plan, or None."""
+        return fewest_hops(start, goal, lambda room: self.exits(room, avoid_doors))
 
     def exits(self, room: str, avoid_doors: set[str] | None = None) -> list[tuple[str, str | None]]:
         """(neighbouring room, door or None for a passage), on the building's plan."""
@@ -143,10 +121,6 @@ class DoorWorld(SimulatedWorld):
     def robot_room(self, robot: str) -> str:
         with self._lock:
             return next(f[2] for f in self._facts if f[0] == "at" and f[1] == robot)
-
-    def holds(self, *fact: str) -> bool:
-        with self._lock:
-            return tuple(fact) in self._facts
 
     def _set(self, fact: tuple[str, ...], truth: bool) -> None:
         with self._lock:
@@ -174,7 +148,7 @@ class DoorWorld(SimulatedWorld):
 
     def grasp_handle(self, door: str) -> bool:
         self.sim_time += 3.0
-        if self.fault("handle-slip"):
+        if self.chance("handle-slip"):
             self.inject("handle-slip", f"open {door}", "the gripper slid off the handle")
             return False
         return True
@@ -190,7 +164,7 @@ class DoorWorld(SimulatedWorld):
         self.actions_run += 1
         if door in self.locked:
             return False
-        if self.fault("door-stuck"):
+        if self.chance("door-stuck"):
             self.inject("door-stuck", f"open {door}", "the door is stuck in its frame")
             return False
         self._set(("door-closed", door), False)
@@ -208,7 +182,7 @@ class DoorWorld(SimulatedWorld):
             return False
         if origin not in self.doors[door] or destination not in self.doors[door]:
             return False
-        if self.fault("door-swung"):
+        if self.chance("door-swung"):
             self.inject("door-swung", f"pass {door}", "the door closer swung the door shut")
             self._set(("door-open", door), False)
             self._set(("door-closed", door), True)

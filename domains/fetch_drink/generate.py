@@ -15,6 +15,8 @@ import random
 import sys
 from collections.abc import Sequence
 
+from plan_bridge.problem_writer import both_ways, generator_main, pddl_problem
+
 
 def corridors(places: Sequence[str], loops: int, rng: random.Random) -> list[tuple[str, str]]:
     """A spanning tree over ``places`` plus ``loops`` extra corridors (undirected)."""
@@ -46,29 +48,26 @@ def problem_text(*, rooms: int, drinks: int, shelves: int, loops: int, seed: int
     rooms_only = places[1:]
     init = [f"(at pr2 {rng.choice(rooms_only)})", "(hand-empty pr2)"]
     for a, b in edges:
-        init += [
-            f"(connected {a} {b})",
-            f"(connected {b} {a})",
-            f"(clear {a} {b})",
-            f"(clear {b} {a})",
-        ]
+        init += both_ways(a, b, "connected", "clear")
     init += ["(fridge-in kitchen-fridge kitchen)", "(fridge-closed kitchen-fridge)"]
     init += [f"(shelf-of {s} kitchen-fridge)" for s in shelf_names]
     init += [f"(on {d} {rng.choice(shelf_names)})" for d in drink_names]
     init += [f"(person-at {p} {rng.choice(rooms_only)})" for p in people]
     goal = [f"(served {p} {d})" for p, d in zip(people, drink_names, strict=True)]
     goal.append("(fridge-closed kitchen-fridge)")
-    lines = "\n         ".join(init)
-    return (
-        f"; generated: --rooms {rooms} --drinks {drinks} --shelves {shelves} --loops {loops} "
-        f"--seed {seed}\n"
-        f"(define (problem fetch-drink-r{rooms}-d{drinks}-s{seed})\n"
-        "  (:domain fetch-drink)\n"
-        f"  (:objects pr2 - robot {' '.join(places)} - place kitchen-fridge - fridge\n"
-        f"            {' '.join(shelf_names)} - shelf {' '.join(drink_names)} - drink\n"
-        f"            {' '.join(people)} - person)\n"
-        f"  (:init {lines})\n"
-        f"  (:goal (and {' '.join(goal)})))\n"
+    return pddl_problem(
+        f"fetch-drink-r{rooms}-d{drinks}-s{seed}",
+        "fetch-drink",
+        objects=[
+            f"pr2 - robot {' '.join(places)} - place kitchen-fridge - fridge",
+            f"{' '.join(shelf_names)} - shelf {' '.join(drink_names)} - drink",
+            f"{' '.join(people)} - person",
+        ],
+        init=init,
+        goal=goal,
+        comment=f"generated: --rooms {rooms} --drinks {drinks} --shelves {shelves} "
+        f"--loops {loops} --seed {seed}",
+        compact=True,
     )
 
 
@@ -79,16 +78,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--shelves", type=int, default=3, help="shelves of the fridge")
     parser.add_argument("--loops", type=int, default=None, help="extra corridors (default rooms/2)")
     parser.add_argument("--seed", type=int, default=0)
-    args = parser.parse_args(argv)
-    loops = args.loops if args.loops is not None else max(1, args.rooms // 2)
-    try:
-        text = problem_text(
-            rooms=args.rooms, drinks=args.drinks, shelves=args.shelves, loops=loops, seed=args.seed
-        )
-    except ValueError as exc:
-        parser.error(str(exc))
-    sys.stdout.write(text)
-    return 0
+    return generator_main(
+        parser,
+        lambda args: problem_text(
+            rooms=args.rooms,
+            drinks=args.drinks,
+            shelves=args.shelves,
+            loops=args.loops if args.loops is not None else max(1, args.rooms // 2),
+            seed=args.seed,
+        ),
+        argv,
+    )
 
 
 if __name__ == "__main__":

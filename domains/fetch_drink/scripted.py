@@ -23,7 +23,6 @@ or replan. Per order the machine is::
 
 from __future__ import annotations
 
-import heapq
 import itertools
 from collections.abc import Sequence
 
@@ -41,31 +40,9 @@ from .skills import (
 )
 from .world import CONGESTION_WAIT, FetchDrinkWorld
 
-__all__ = ["follow_route", "scripted", "shortest_route"]
+__all__ = ["follow_route", "scripted"]
 
 OUTCOMES = ["succeeded", "aborted", "preempted"]
-
-
-def shortest_route(
-    world: FetchDrinkWorld, start: str, goal: str, avoid: set[frozenset[str]] | None = None
-) -> list[str] | None:
-    """The shortest route (by corridor length) on the believed map, or None."""
-    avoid = avoid or set()
-    queue: list[tuple[float, list[str]]] = [(0.0, [start])]
-    done: set[str] = set()
-    while queue:
-        length, route = heapq.heappop(queue)
-        here = route[-1]
-        if here == goal:
-            return route
-        if here in done:
-            continue
-        done.add(here)
-        for there in world.neighbours(here, avoid):
-            if there not in done:
-                corridor = frozenset((here, there))
-                heapq.heappush(queue, (length + world.corridors[corridor], [*route, there]))
-    return None
 
 
 def follow_route(world: FetchDrinkWorld, route: Sequence[str] | None) -> smach.Iterator:
@@ -141,9 +118,9 @@ class ReturnToStart(smach.State):
 
 def go_to(world: FetchDrinkWorld, start: str, goal: str) -> smach.StateMachine:
     """FOLLOW_ROUTE --blocked--> RETURN_TO_START -> FOLLOW_DETOUR (both routes fixed now)."""
-    route = shortest_route(world, start, goal)
+    route = world.route(start, goal)
     used = {frozenset(c) for c in zip(route or [], (route or [])[1:], strict=False)}
-    detour = shortest_route(world, start, goal, avoid=used)
+    detour = world.route(start, goal, avoid=used)
     sm = smach.StateMachine(outcomes=["arrived", "failed", "preempted"], input_keys=["robot"])
     with sm:
         smach.StateMachine.add(
@@ -199,6 +176,7 @@ def scripted(
             mission.userdata[f"shelf_{n}"] = shelf_of[drink]
             mission.userdata[f"person_{n}"] = person
             mission.userdata[f"room_{n}"] = room
+            this_drink = {"drink": f"drink_{n}", "shelf": f"shelf_{n}"}
             smach.StateMachine.add(
                 f"GO_TO_FRIDGE_{n}",
                 go_to(world, here, kitchen),
@@ -213,13 +191,13 @@ def scripted(
                 f"FIND_DRINK_{n}",
                 ScanShelves(world),
                 {"found": f"PICK_{n}", "missing": "aborted"},
-                remapping={"drink": f"drink_{n}", "shelf": f"shelf_{n}"},
+                remapping=this_drink,
             )
             smach.StateMachine.add(
                 f"PICK_{n}",
                 grasp_machine(world),
                 {"held": f"CLOSE_FRIDGE_{n}", "slipped": "aborted"},
-                remapping={"drink": f"drink_{n}", "shelf": f"shelf_{n}"},
+                remapping=this_drink,
             )
             smach.StateMachine.add(
                 f"CLOSE_FRIDGE_{n}",

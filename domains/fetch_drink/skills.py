@@ -11,11 +11,10 @@ missions use the same motor skills and differ only in who decides what to do nex
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
-
 import smach
 from plan_bridge.domain import PlanningTask
 from plan_bridge.mission import MissionSetup
+from plan_bridge.skill_kit import Report, RobotState, fact, observe, skill_machine
 from plan_bridge.skills import SkillRegistry
 
 from .world import CONGESTION_WAIT, FetchDrinkWorld
@@ -24,7 +23,6 @@ __all__ = [
     "CheckFridge",
     "DetectDrink",
     "Drive",
-    "Report",
     "build_skills",
     "close_fridge_machine",
     "drive_machine",
@@ -36,7 +34,6 @@ __all__ = [
     "setup",
 ]
 
-SKILL_OUTCOMES = ["succeeded", "aborted", "preempted"]
 #: Attempts of the local retries (a robotics engineer's usual "try three times").
 DRIVE_ATTEMPTS = 4
 OPEN_ATTEMPTS = 3
@@ -44,27 +41,21 @@ GRASP_ATTEMPTS = 3
 CLOSE_ATTEMPTS = 2
 
 
-def fact(*words: str) -> str:
-    return "(" + " ".join(words) + ")"
-
-
 # -- building blocks -------------------------------------------------------------------
 
 
-class Drive(smach.State):
+class Drive(RobotState[FetchDrinkWorld]):
     """Drive one corridor, ``origin`` -> ``destination``."""
 
     def __init__(self, world: FetchDrinkWorld) -> None:
         super().__init__(
-            outcomes=["arrived", "congested", "blocked", "preempted"],
+            world,
+            ["arrived", "congested", "blocked"],
             input_keys=["robot", "origin", "destination"],
+            io_keys=(),
         )
-        self.world = world
 
-    def execute(self, ud: smach.UserData) -> str:
-        if self.preempt_requested():
-            self.service_preempt()
-            return "preempted"
+    def act(self, ud: smach.UserData) -> str:
         return self.world.drive(ud.robot, ud.origin, ud.destination)
 
 
@@ -78,24 +69,6 @@ class WaitForPassage(smach.State):
     def execute(self, ud: smach.UserData) -> str:
         self.world.wait(CONGESTION_WAIT)
         return "waited"
-
-
-class Report(smach.State):
-    """Add observations (computed from userdata) and return ``outcome``."""
-
-    def __init__(
-        self,
-        observe: Callable[[smach.UserData], Mapping[str, bool]],
-        outcome: str = "reported",
-        input_keys: list[str] | None = None,
-    ) -> None:
-        super().__init__(outcomes=[outcome], input_keys=input_keys or [], io_keys=["observations"])
-        self.observe = observe
-        self.outcome = outcome
-
-    def execute(self, ud: smach.UserData) -> str:
-        ud.observations = {**ud.observations, **self.observe(ud)}
-        return self.outcome
 
 
 class Pause(smach.State):
@@ -150,11 +123,11 @@ class CheckFridge(smach.State):
 
     def execute(self, ud: smach.UserData) -> str:
         is_open = self.world.holds("fridge-open", ud.fridge)
-        ud.observations = {
-            **ud.observations,
-            fact("fridge-open", ud.fridge): is_open,
-            fact("fridge-closed", ud.fridge): not is_open,
-        }
+        observe(
+            ud,
+            (fact("fridge-open", ud.fridge), is_open),
+            (fact("fridge-closed", ud.fridge), not is_open),
+        )
         return "open" if is_open else "closed"
 
 
@@ -177,11 +150,13 @@ class DetectDrink(smach.State):
     def execute(self, ud: smach.UserData) -> str:
         found = self.world.look_for(ud.drink, ud.fridge)
         ud.found_shelf = found
-        seen = {
-            fact("on", ud.drink, shelf): shelf == found
-            for shelf in self.world.shelves_of(ud.fridge)
-        }
-        ud.observations = {**ud.observations, **seen}
+        observe(
+            ud,
+            *(
+                (fact("on", ud.drink, shelf), shelf == found)
+                for shelf in self.world.shelves_of(ud.fridge)
+            ),
+        )
         if found is None:
             return "missing"
         return "seen" if found == ud.shelf else "elsewhere"
@@ -226,7 +201,7 @@ class FindPerson(smach.State):
             actual = self.world.where_is(ud.person)
             if actual is not None:
                 seen[fact("person-at", ud.person, actual)] = True
-        ud.observations = {**ud.observations, **seen}
+        observe(ud, *seen.items())
         return "found" if present else "absent"
 
 
@@ -240,14 +215,6 @@ class OfferDrink(smach.State):
 
 
 # -- skills: one machine per action -------------------------------------------------------
-
-
-def _skill_machine(**userdata: object) -> smach.StateMachine:
-    sm = smach.StateMachine(outcomes=SKILL_OUTCOMES, output_keys=["observations"])
-    for key, value in userdata.items():
-        sm.userdata[key] = value
-    sm.userdata.observations = {}
-    return sm
 
 
 def drive_machine(world: FetchDrinkWorld) -> smach.Retry:
@@ -280,7 +247,7 @@ def navigate_machine(
               --blocked--> REPORT_BLOCKED (clear from to: false) --> aborted
               --congested--> aborted (still crowded: the executive may retry the step)
     """
-    sm = _skill_machine(robot=robot, from_place=origin, to_place=destination)
+    sm = skill_machine(bind={"robot": robot, "from_place": origin, "to_place": destination})
     with sm:
         smach.StateMachine.add(
             "DRIVE",
@@ -322,7 +289,7 @@ def open_attempt(world: FetchDrinkWorld) -> smach.StateMachine:
 
 def open_fridge_machine(world: FetchDrinkWorld, robot: str, fridge: str) -> smach.StateMachine:
     """FIND_HANDLE -> OPEN (Retry x3 [GRASP_HANDLE -> PULL_DOOR]) -> CHECK_OPEN."""
-    sm = _skill_machine(robot=robot, fridge=fridge)
+    sm = skill_machine(bind={"robot": robot, "fridge": fridge})
     with sm:
         smach.StateMachine.add("FIND_HANDLE", Pause(world, 1.5, "found"), {"found": "OPEN"})
         smach.StateMachine.add(
@@ -361,7 +328,9 @@ def pick_machine(
         GRASP --held--> RETREAT --> succeeded
               --slipped--> REPORT_SLIP (still on the shelf, hand empty) --> aborted
     """
-    sm = _skill_machine(robot=robot, drink=drink, shelf=shelf, fridge=fridge, found_shelf=None)
+    sm = skill_machine(
+        bind={"robot": robot, "drink": drink, "shelf": shelf, "fridge": fridge, "found_shelf": None}
+    )
     with sm:
         smach.StateMachine.add(
             "DETECT",
@@ -389,7 +358,7 @@ def pick_machine(
 
 def close_fridge_machine(world: FetchDrinkWorld, robot: str, fridge: str) -> smach.StateMachine:
     """PUSH_DOOR (Retry x2 while it bounces back) -> CHECK_CLOSED."""
-    sm = _skill_machine(robot=robot, fridge=fridge)
+    sm = skill_machine(bind={"robot": robot, "fridge": fridge})
     with sm:
         smach.StateMachine.add(
             "PUSH_DOOR",
@@ -408,7 +377,7 @@ def hand_over_machine(
     world: FetchDrinkWorld, robot: str, drink: str, person: str, place: str
 ) -> smach.StateMachine:
     """FIND_PERSON -> OFFER (release when the person pulls) -> RETRACT."""
-    sm = _skill_machine(robot=robot, drink=drink, person=person, place=place)
+    sm = skill_machine(bind={"robot": robot, "drink": drink, "person": person, "place": place})
     with sm:
         smach.StateMachine.add(
             "FIND_PERSON", FindPerson(world), {"found": "OFFER", "absent": "aborted"}

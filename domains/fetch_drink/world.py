@@ -30,6 +30,7 @@ from collections.abc import Iterable
 
 from plan_bridge.domain import Fact, PlanningTask
 from plan_bridge.simulation import SimulatedWorld
+from plan_bridge.skill_kit import shortest_route
 
 __all__ = ["FetchDrinkWorld"]
 
@@ -58,12 +59,13 @@ CONGESTION_WAIT = 5.0  # s a person standing in a corridor takes to move on
 class FetchDrinkWorld(SimulatedWorld):
     """A home with a fridge: places joined by corridors, drinks on shelves."""
 
+    fault_scale = FAULT_SCALE
+    variants = VARIANTS
+
     def __init__(
         self, task: PlanningTask, *, seed: int | None = 0, fail_rate: float = 0.0, variant: str = ""
     ) -> None:
-        if variant not in VARIANTS:
-            raise ValueError(f"unknown variant {variant!r}; variants: {', '.join(VARIANTS)}")
-        super().__init__(task, seed=seed, fail_rate=fail_rate)
+        super().__init__(task, seed=seed, fail_rate=fail_rate, variant=variant)
         self.corridors: dict[Corridor, float] = {}
         for fact in task.initial_facts:
             if fact[0] == "connected":
@@ -75,17 +77,11 @@ class FetchDrinkWorld(SimulatedWorld):
             self._move_people()
 
     # -- faults decided when the world is made ------------------------------------------
-    def fault(self, kind: str) -> bool:
-        """Draw whether a fault of ``kind`` happens now (always False at fail_rate 0)."""
-        if not self.fail_rate:
-            return False
-        return self.rng.random() < min(1.0, FAULT_SCALE[kind] * self.fail_rate)
-
     def _misplace_drinks(self) -> None:
         for fact in sorted(f for f in self._facts if f[0] == "on"):
             drink, shelf = fact[1], fact[2]
             others = [s for s in self.shelves_of(self.fridge_of(shelf)) if s != shelf]
-            if others and self.fault("drink-misplaced"):
+            if others and self.chance("drink-misplaced"):
                 actual = self.rng.choice(others)
                 self._facts.discard(fact)
                 self._facts.add(("on", drink, actual))
@@ -93,7 +89,7 @@ class FetchDrinkWorld(SimulatedWorld):
 
     def _block_corridors(self) -> None:
         for corridor in sorted(self.corridors, key=sorted):
-            if not self.fault("corridor-blocked"):
+            if not self.chance("corridor-blocked"):
                 continue
             if not self._connected_without(self.blocked | {corridor}):
                 continue  # keep the home connected: the mission must stay solvable
@@ -142,6 +138,19 @@ class FetchDrinkWorld(SimulatedWorld):
             if place in c and c not in avoided and len(c) == 2
         )
 
+    def route(self, start: str, goal: str, avoid: Iterable[Corridor] = ()) -> list[str] | None:
+        """The shortest route (by corridor length) on the floor plan, blocked corridors
+        included (the plan does not show them), avoiding the corridors ``avoid``; or None."""
+        avoided = set(avoid)
+        return shortest_route(
+            start,
+            goal,
+            lambda here: (
+                (there, self.corridors[frozenset((here, there))])
+                for there in self.neighbours(here, avoided)
+            ),
+        )
+
     def shelves_of(self, fridge: str) -> list[str]:
         return sorted(
             f[1] for f in self.task.initial_facts if f[0] == "shelf-of" and f[2] == fridge
@@ -153,10 +162,6 @@ class FetchDrinkWorld(SimulatedWorld):
     def robot_place(self, robot: str) -> str:
         with self._lock:
             return next(f[2] for f in self._facts if f[0] == "at" and f[1] == robot)
-
-    def holds(self, *fact: str) -> bool:
-        with self._lock:
-            return tuple(fact) in self._facts
 
     def _elapse(self, seconds: float) -> None:
         self.sim_time += seconds
@@ -181,7 +186,7 @@ class FetchDrinkWorld(SimulatedWorld):
             # The robot sees the box halfway along and returns to where it started.
             self._elapse(length / DRIVE_SPEED)
             return "blocked"
-        if self.fault("corridor-congested"):
+        if self.chance("corridor-congested"):
             self.inject(
                 "corridor-congested", f"drive {origin} {destination}", "a person is in the way"
             )
@@ -196,7 +201,7 @@ class FetchDrinkWorld(SimulatedWorld):
 
     def grasp_fridge_handle(self, fridge: str) -> bool:
         self._elapse(4.0)
-        if self.fault("handle-slip"):
+        if self.chance("handle-slip"):
             self.inject("handle-slip", f"open {fridge}", "the gripper slid off the handle")
             return False
         return True
@@ -204,7 +209,7 @@ class FetchDrinkWorld(SimulatedWorld):
     def pull_fridge_door(self, fridge: str) -> bool:
         """Pull the door open; the magnetic seal sometimes holds it shut."""
         self._elapse(3.0)
-        if self.fault("fridge-stuck"):
+        if self.chance("fridge-stuck"):
             self.inject("fridge-stuck", f"open {fridge}", "the door seal held")
             return False
         self._move_fact(("fridge-closed", fridge), ("fridge-open", fridge))
@@ -213,7 +218,7 @@ class FetchDrinkWorld(SimulatedWorld):
     def push_fridge_door(self, fridge: str) -> bool:
         """Push the door shut; it sometimes bounces back open."""
         self._elapse(3.0)
-        if self.fault("door-rebound"):
+        if self.chance("door-rebound"):
             self.inject("door-rebound", f"close {fridge}", "the door bounced back open")
             return False
         self._move_fact(("fridge-open", fridge), ("fridge-closed", fridge))
@@ -236,7 +241,7 @@ class FetchDrinkWorld(SimulatedWorld):
         self._elapse(6.0)
         if not self.holds("on", drink, shelf) or not self.holds("hand-empty", robot):
             return False
-        if self.fault("grasp-slip"):
+        if self.chance("grasp-slip"):
             self.inject("grasp-slip", f"pick {drink}", f"{drink} slipped back onto {shelf}")
             return False
         with self._lock:

@@ -14,6 +14,8 @@ import random
 import sys
 from collections.abc import Sequence
 
+from plan_bridge.problem_writer import both_ways, generator_main, pddl_problem
+
 
 def problem_text(*, rooms: int, items: int, chords: int, seed: int) -> str:
     if rooms < 2 or items < 1 or chords < 0:
@@ -33,20 +35,20 @@ def problem_text(*, rooms: int, items: int, chords: int, seed: int) -> str:
     init = [f"(at pr2 {rng.choice(names)})", "(hand-empty pr2)", "(battery-ok pr2)"]
     init += ["(unplugged pr2)", "(charger-at room1)"]
     for a, b in sorted(edges):
-        init += [f"(connected {a} {b})", f"(connected {b} {a})"]
+        init += both_ways(a, b, "connected")
     goal = []
     for item in item_names:
         source, target = rng.sample(names, 2)
         init.append(f"(item-at {item} {source})")
         goal.append(f"(item-at {item} {target})")
-    lines = "\n         ".join(init)
-    return (
-        f"; generated: --rooms {rooms} --items {items} --chords {chords} --seed {seed}\n"
-        f"(define (problem recharge-r{rooms}-i{items}-s{seed})\n"
-        "  (:domain recharge)\n"
-        f"  (:objects pr2 - robot {' '.join(names)} - room {' '.join(item_names)} - item)\n"
-        f"  (:init {lines})\n"
-        f"  (:goal (and {' '.join(goal)})))\n"
+    return pddl_problem(
+        f"recharge-r{rooms}-i{items}-s{seed}",
+        "recharge",
+        objects=[f"pr2 - robot {' '.join(names)} - room {' '.join(item_names)} - item"],
+        init=init,
+        goal=goal,
+        comment=f"generated: --rooms {rooms} --items {items} --chords {chords} --seed {seed}",
+        compact=True,
     )
 
 
@@ -58,14 +60,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         "--chords", type=int, default=None, help="extra corridors (default rooms/3)"
     )
     parser.add_argument("--seed", type=int, default=0)
-    args = parser.parse_args(argv)
-    chords = args.chords if args.chords is not None else args.rooms // 3
-    try:
-        text = problem_text(rooms=args.rooms, items=args.items, chords=chords, seed=args.seed)
-    except ValueError as exc:
-        parser.error(str(exc))
-    sys.stdout.write(text)
-    return 0
+    return generator_main(
+        parser,
+        lambda args: problem_text(
+            rooms=args.rooms,
+            items=args.items,
+            chords=args.chords if args.chords is not None else args.rooms // 3,
+            seed=args.seed,
+        ),
+        argv,
+    )
 
 
 if __name__ == "__main__":

@@ -24,11 +24,11 @@ from plan_bridge.mission import ScriptedMission
 
 from .skills import (
     PlanRoute,
-    WorldCall,
     charge_state,
     dock_behaviour,
     drive_with_monitor,
     pick_behaviour,
+    place_state,
     plug_in_behaviour,
     unplug_state,
 )
@@ -74,56 +74,38 @@ def scripted(task: PlanningTask, *, seed: int, fail_rate: float) -> ScriptedMiss
     deliveries = [(g[1], believed_at[g[1]], g[2]) for g in task.goal_facts if g[0] == "item-at"]
     mission = smach.StateMachine(outcomes=["succeeded", "aborted", "preempted"])
     mission.userdata.robot = world.robot
+
+    def add_go_to(leg: str, destination: str, arrived: str) -> None:
+        """GO_TO_<leg>; when the battery runs low on the way, RECHARGE_FOR_<leg>, then again."""
+        smach.StateMachine.add(
+            f"GO_TO_{leg}",
+            go_to_behaviour(world),
+            {"arrived": arrived, "battery_low": f"RECHARGE_FOR_{leg}", "failed": "aborted"},
+            remapping={"destination": destination},
+        )
+        smach.StateMachine.add(
+            f"RECHARGE_FOR_{leg}",
+            recharge_behaviour(world),
+            {"charged": f"GO_TO_{leg}", "failed": "aborted"},
+        )
+
     with mission:
         for n, (item, source, target) in enumerate(deliveries, start=1):
             done = "succeeded" if n == len(deliveries) else f"GO_TO_ITEM_{n + 1}"
             mission.userdata[f"item_{n}"] = item
             mission.userdata[f"source_{n}"] = source
             mission.userdata[f"target_{n}"] = target
-            smach.StateMachine.add(
-                f"GO_TO_ITEM_{n}",
-                go_to_behaviour(world),
-                {
-                    "arrived": f"PICK_{n}",
-                    "battery_low": f"RECHARGE_FOR_ITEM_{n}",
-                    "failed": "aborted",
-                },
-                remapping={"destination": f"source_{n}"},
-            )
-            smach.StateMachine.add(
-                f"RECHARGE_FOR_ITEM_{n}",
-                recharge_behaviour(world),
-                {"charged": f"GO_TO_ITEM_{n}", "failed": "aborted"},
-            )
+            add_go_to(f"ITEM_{n}", f"source_{n}", f"PICK_{n}")
             smach.StateMachine.add(
                 f"PICK_{n}",
                 pick_behaviour(world),
                 {"picked": f"GO_TO_TARGET_{n}", "failed": "aborted"},
                 remapping={"item": f"item_{n}", "room": f"source_{n}"},
             )
-            smach.StateMachine.add(
-                f"GO_TO_TARGET_{n}",
-                go_to_behaviour(world),
-                {
-                    "arrived": f"PLACE_{n}",
-                    "battery_low": f"RECHARGE_FOR_TARGET_{n}",
-                    "failed": "aborted",
-                },
-                remapping={"destination": f"target_{n}"},
-            )
-            smach.StateMachine.add(
-                f"RECHARGE_FOR_TARGET_{n}",
-                recharge_behaviour(world),
-                {"charged": f"GO_TO_TARGET_{n}", "failed": "aborted"},
-            )
+            add_go_to(f"TARGET_{n}", f"target_{n}", f"PLACE_{n}")
             smach.StateMachine.add(
                 f"PLACE_{n}",
-                WorldCall(
-                    lambda ud: world.put_down(ud.robot, ud.item),
-                    ok="placed",
-                    failed="failed",
-                    input_keys=["robot", "item"],
-                ),
+                place_state(world),
                 {"placed": done, "failed": "aborted"},
                 remapping={"item": f"item_{n}"},
             )

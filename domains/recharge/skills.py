@@ -28,6 +28,7 @@ from collections.abc import Callable
 import smach
 from plan_bridge.domain import PlanningTask
 from plan_bridge.mission import MissionSetup
+from plan_bridge.skill_kit import WorldCall, fact, observe, skill_machine
 from plan_bridge.skills import SkillRegistry
 
 from .world import RechargeWorld
@@ -42,16 +43,11 @@ __all__ = [
     "setup",
 ]
 
-SKILL_OUTCOMES = ["succeeded", "aborted", "preempted"]
 PLUG_ATTEMPTS = 3
 GRASP_ATTEMPTS = 2
 #: Real seconds a held drive waits for the monitor's preempt before giving up; the
 #: monitor answers in microseconds, this only bounds a run without a monitor.
 HOLD_TIMEOUT = 5.0
-
-
-def fact(*words: str) -> str:
-    return "(" + " ".join(words) + ")"
 
 
 class DriveRoute(smach.State):
@@ -167,7 +163,7 @@ class ObserveRobot(smach.State):
         )
         seen[fact("plugged", robot)] = world.holds("plugged", robot)
         seen[fact("unplugged", robot)] = world.holds("unplugged", robot)
-        ud.observations = {**ud.observations, **seen}
+        observe(ud, *seen.items())
         return self.outcome
 
 
@@ -188,19 +184,11 @@ class PlanRoute(smach.State):
         return "planned" if route else "unreachable"
 
 
-class WorldCall(smach.State):
-    """A state that calls one world method and names the result."""
-
-    def __init__(
-        self, call: Callable[[smach.UserData], bool], *, ok: str, failed: str, input_keys: list[str]
-    ) -> None:
-        super().__init__(outcomes=[ok, failed], input_keys=input_keys)
-        self.call = call
-        self.ok = ok
-        self.failed = failed
-
-    def execute(self, ud: smach.UserData) -> str:
-        return self.ok if self.call(ud) else self.failed
+def _robot_call(call: Callable[[str], bool], *, ok: str, failed: str) -> WorldCall:
+    """One call for the robot in userdata ``robot``: ``ok`` if it worked, else ``failed``."""
+    return WorldCall(
+        lambda ud: call(ud.robot), ok=ok, failed=failed, input_keys=["robot"], preemptable=False
+    )
 
 
 def dock_behaviour(world: RechargeWorld) -> smach.StateMachine:
@@ -224,32 +212,18 @@ def plug_in_behaviour(world: RechargeWorld) -> smach.StateMachine:
     with attempt:
         smach.StateMachine.add(
             "ALIGN_AND_INSERT",
-            WorldCall(
-                lambda ud: world.insert_plug(ud.robot),
-                ok="inserted",
-                failed="missed",
-                input_keys=["robot"],
-            ),
+            _robot_call(world.insert_plug, ok="inserted", failed="missed"),
             {"inserted": "CHECK_CURRENT"},
         )
         smach.StateMachine.add(
-            "CHECK_CURRENT",
-            WorldCall(
-                lambda ud: world.charging_current(ud.robot),
-                ok="plugged",
-                failed="missed",
-                input_keys=["robot"],
-            ),
+            "CHECK_CURRENT", _robot_call(world.charging_current, ok="plugged", failed="missed")
         )
     sm = smach.StateMachine(outcomes=["plugged", "failed", "preempted"], input_keys=["robot"])
     with sm:
         smach.StateMachine.add(
             "FIND_SOCKET",
-            WorldCall(
-                lambda ud: world.room_of(ud.robot) in world.chargers,
-                ok="found",
-                failed="missing",
-                input_keys=["robot"],
+            _robot_call(
+                lambda robot: world.room_of(robot) in world.chargers, ok="found", failed="missing"
             ),
             {"found": "PLUG", "missing": "failed"},
         )
@@ -262,14 +236,21 @@ def plug_in_behaviour(world: RechargeWorld) -> smach.StateMachine:
 
 
 def charge_state(world: RechargeWorld) -> smach.State:
-    return WorldCall(
-        lambda ud: world.charge(ud.robot), ok="charged", failed="failed", input_keys=["robot"]
-    )
+    return _robot_call(world.charge, ok="charged", failed="failed")
 
 
 def unplug_state(world: RechargeWorld) -> smach.State:
+    return _robot_call(world.pull_plug, ok="unplugged", failed="failed")
+
+
+def place_state(world: RechargeWorld) -> smach.State:
+    """Put the item in userdata ``item`` down in the robot's room: placed / failed."""
     return WorldCall(
-        lambda ud: world.pull_plug(ud.robot), ok="unplugged", failed="failed", input_keys=["robot"]
+        lambda ud: world.put_down(ud.robot, ud.item),
+        ok="placed",
+        failed="failed",
+        input_keys=["robot", "item"],
+        preemptable=False,
     )
 
 
@@ -286,6 +267,7 @@ def pick_behaviour(world: RechargeWorld) -> smach.StateMachine:
                 ok="closed",
                 failed="closed",
                 input_keys=keys,
+                preemptable=False,
             ),
             {"closed": "VERIFY_GRASP"},
         )
@@ -296,6 +278,7 @@ def pick_behaviour(world: RechargeWorld) -> smach.StateMachine:
                 ok="held",
                 failed="slipped",
                 input_keys=keys,
+                preemptable=False,
             ),
         )
     sm = smach.StateMachine(outcomes=["picked", "failed", "preempted"], input_keys=keys)
@@ -313,11 +296,28 @@ def pick_behaviour(world: RechargeWorld) -> smach.StateMachine:
 # -- skills: one machine per action, arguments preset in userdata ------------------------------
 
 
-def _skill_machine(**userdata: object) -> smach.StateMachine:
-    sm = smach.StateMachine(outcomes=SKILL_OUTCOMES, output_keys=["observations"])
-    for key, value in userdata.items():
-        sm.userdata[key] = value
-    sm.userdata.observations = {}
+def _reported_skill(
+    world: RechargeWorld,
+    label: str,
+    behaviour: smach.State,
+    reports: dict[str, tuple[str, str]],
+    bind: dict[str, object],
+    remapping: dict[str, str] | None = None,
+) -> smach.StateMachine:
+    """LABEL, then per outcome of it a REPORT_X state (position, battery) ending the skill.
+
+    ``reports``: outcome of ``behaviour`` -> (label of its report, outcome of the skill).
+    """
+    sm = skill_machine(bind=bind)
+    with sm:
+        smach.StateMachine.add(
+            label,
+            behaviour,
+            {outcome: report for outcome, (report, _) in reports.items()},
+            remapping=remapping,
+        )
+        for report, outcome in reports.values():
+            smach.StateMachine.add(report, ObserveRobot(world, outcome))
     return sm
 
 
@@ -325,94 +325,71 @@ def move_skill(
     world: RechargeWorld, robot: str, origin: str, destination: str
 ) -> smach.StateMachine:
     """DRIVE_WITH_MONITOR -> REPORT (position, battery): succeeded / aborted."""
-    sm = _skill_machine(robot=robot, corridor=[origin, destination])
-    with sm:
-        smach.StateMachine.add(
-            "DRIVE_WITH_MONITOR",
-            drive_with_monitor(world),
-            {
-                "arrived": "REPORT_ARRIVAL",
-                "battery_low": "REPORT_BATTERY_LOW",
-                "failed": "REPORT_FAILURE",
-            },
-            remapping={"route": "corridor"},
-        )
-        smach.StateMachine.add("REPORT_ARRIVAL", ObserveRobot(world, "succeeded"))
-        smach.StateMachine.add("REPORT_BATTERY_LOW", ObserveRobot(world, "aborted"))
-        smach.StateMachine.add("REPORT_FAILURE", ObserveRobot(world, "aborted"))
-    return sm
+    return _reported_skill(
+        world,
+        "DRIVE_WITH_MONITOR",
+        drive_with_monitor(world),
+        {
+            "arrived": ("REPORT_ARRIVAL", "succeeded"),
+            "battery_low": ("REPORT_BATTERY_LOW", "aborted"),
+            "failed": ("REPORT_FAILURE", "aborted"),
+        },
+        {"robot": robot, "corridor": [origin, destination]},
+        remapping={"route": "corridor"},
+    )
 
 
 def go_to_charger_skill(world: RechargeWorld, robot: str, dock: str) -> smach.StateMachine:
-    sm = _skill_machine(robot=robot, destination=dock)
-    with sm:
-        smach.StateMachine.add(
-            "GO_TO_DOCK",
-            dock_behaviour(world),
-            {"docked": "REPORT_DOCKED", "failed": "REPORT_STRANDED"},
-        )
-        smach.StateMachine.add("REPORT_DOCKED", ObserveRobot(world, "succeeded"))
-        smach.StateMachine.add("REPORT_STRANDED", ObserveRobot(world, "aborted"))
-    return sm
+    return _reported_skill(
+        world,
+        "GO_TO_DOCK",
+        dock_behaviour(world),
+        {"docked": ("REPORT_DOCKED", "succeeded"), "failed": ("REPORT_STRANDED", "aborted")},
+        {"robot": robot, "destination": dock},
+    )
 
 
 def pick_skill(world: RechargeWorld, robot: str, item: str, room: str) -> smach.StateMachine:
-    sm = _skill_machine(robot=robot, item=item, room=room)
+    sm = skill_machine(bind={"robot": robot, "item": item, "room": room})
     with sm:
         smach.StateMachine.add(
             "PICK", pick_behaviour(world), {"picked": "succeeded", "failed": "REPORT_MISS"}
         )
-        smach.StateMachine.add(
-            "REPORT_MISS",
-            ObserveRobot(world, "aborted"),
-        )
+        smach.StateMachine.add("REPORT_MISS", ObserveRobot(world, "aborted"))
     return sm
 
 
 def place_skill(world: RechargeWorld, robot: str, item: str) -> smach.StateMachine:
-    sm = _skill_machine(robot=robot, item=item)
+    sm = skill_machine(bind={"robot": robot, "item": item})
     with sm:
         smach.StateMachine.add(
-            "PLACE",
-            WorldCall(
-                lambda ud: world.put_down(ud.robot, ud.item),
-                ok="placed",
-                failed="failed",
-                input_keys=["robot", "item"],
-            ),
-            {"placed": "succeeded", "failed": "aborted"},
+            "PLACE", place_state(world), {"placed": "succeeded", "failed": "aborted"}
         )
     return sm
 
 
 def plug_in_skill(world: RechargeWorld, robot: str) -> smach.StateMachine:
-    sm = _skill_machine(robot=robot)
-    with sm:
-        smach.StateMachine.add(
-            "PLUG_IN",
-            plug_in_behaviour(world),
-            {"plugged": "REPORT_PLUGGED", "failed": "REPORT_UNPLUGGED"},
-        )
-        smach.StateMachine.add("REPORT_PLUGGED", ObserveRobot(world, "succeeded"))
-        smach.StateMachine.add("REPORT_UNPLUGGED", ObserveRobot(world, "aborted"))
-    return sm
+    return _reported_skill(
+        world,
+        "PLUG_IN",
+        plug_in_behaviour(world),
+        {"plugged": ("REPORT_PLUGGED", "succeeded"), "failed": ("REPORT_UNPLUGGED", "aborted")},
+        {"robot": robot},
+    )
 
 
 def charge_skill(world: RechargeWorld, robot: str) -> smach.StateMachine:
-    sm = _skill_machine(robot=robot)
-    with sm:
-        smach.StateMachine.add(
-            "CHARGE",
-            charge_state(world),
-            {"charged": "REPORT_CHARGED", "failed": "REPORT_NOT_CHARGED"},
-        )
-        smach.StateMachine.add("REPORT_CHARGED", ObserveRobot(world, "succeeded"))
-        smach.StateMachine.add("REPORT_NOT_CHARGED", ObserveRobot(world, "aborted"))
-    return sm
+    return _reported_skill(
+        world,
+        "CHARGE",
+        charge_state(world),
+        {"charged": ("REPORT_CHARGED", "succeeded"), "failed": ("REPORT_NOT_CHARGED", "aborted")},
+        {"robot": robot},
+    )
 
 
 def unplug_skill(world: RechargeWorld, robot: str) -> smach.StateMachine:
-    sm = _skill_machine(robot=robot)
+    sm = skill_machine(bind={"robot": robot})
     with sm:
         smach.StateMachine.add(
             "UNPLUG", unplug_state(world), {"unplugged": "succeeded", "failed": "aborted"}

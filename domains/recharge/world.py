@@ -25,13 +25,13 @@ Simulated durations advance ``sim_time``; nothing sleeps.
 
 from __future__ import annotations
 
-import heapq
 import zlib
 from collections.abc import Callable
 from dataclasses import dataclass
 
 from plan_bridge.domain import PlanningTask
 from plan_bridge.simulation import SimulatedWorld
+from plan_bridge.skill_kit import shortest_route
 
 __all__ = ["LOW_THRESHOLD", "RechargeWorld"]
 
@@ -65,6 +65,8 @@ class Transit:
 class RechargeWorld(SimulatedWorld):
     """Rooms joined by corridors, items to carry, a charger and a draining battery."""
 
+    fault_scale = FAULT_SCALE
+
     def __init__(self, task: PlanningTask, *, seed: int | None = 0, fail_rate: float = 0.0) -> None:
         super().__init__(task, seed=seed, fail_rate=fail_rate)
         self.corridors: dict[frozenset[str], float] = {
@@ -77,15 +79,9 @@ class RechargeWorld(SimulatedWorld):
         self.recharges = 0
         self._transit: dict[str, Transit] = {}
         self._low_listeners: list[Callable[[], None]] = []
-        if self.fault("battery-not-full"):
+        if self.chance("battery-not-full"):
             self.battery = 31.0 + self.rng.random() * 9.0
             self.inject("battery-not-full", "setup", f"the battery starts at {self.battery:.0f} %")
-
-    def fault(self, kind: str) -> bool:
-        """Draw whether a fault of ``kind`` happens now (always False at fail_rate 0)."""
-        if not self.fail_rate:
-            return False
-        return self.rng.random() < min(1.0, FAULT_SCALE[kind] * self.fail_rate)
 
     # -- the power board ---------------------------------------------------------------
     def battery_low(self) -> bool:
@@ -127,28 +123,17 @@ class RechargeWorld(SimulatedWorld):
         with self._lock:
             return next(f[2] for f in self._facts if f[0] == "at" and f[1] == robot)
 
-    def holds(self, *fact: str) -> bool:
-        with self._lock:
-            return tuple(fact) in self._facts
-
     def route(self, start: str, goal: str) -> list[str] | None:
         """The shortest route (by length) on the floor plan, or None."""
-        queue: list[tuple[float, list[str]]] = [(0.0, [start])]
-        done: set[str] = set()
-        while queue:
-            length, route = heapq.heappop(queue)
-            here = route[-1]
-            if here == goal:
-                return route
-            if here in done:
-                continue
-            done.add(here)
-            for corridor, corridor_len in self.corridors.items():
-                if here in corridor:
-                    there = next(iter(corridor - {here}))
-                    if there not in done:
-                        heapq.heappush(queue, (length + corridor_len, [*route, there]))
-        return None
+        return shortest_route(
+            start,
+            goal,
+            lambda here: (
+                (next(iter(corridor - {here})), length)
+                for corridor, length in self.corridors.items()
+                if here in corridor
+            ),
+        )
 
     def _move(self, robot: str, origin: str, destination: str) -> None:
         with self._lock:
@@ -184,7 +169,7 @@ class RechargeWorld(SimulatedWorld):
         self.sim_time += step / SPEED
         per_m = DOCKING_DRAIN_PER_M if transit.docking else DRAIN_PER_M
         self._drain(step * per_m)
-        if self.fault("load-spike"):
+        if self.chance("load-spike"):
             self.inject("load-spike", f"drive {transit.origin} {transit.destination}", "+3 % drain")
             self._drain(LOAD_SPIKE)
         if transit.driven >= transit.length:
@@ -213,7 +198,7 @@ class RechargeWorld(SimulatedWorld):
             return False
         if self.room_of(robot) != room:
             return False
-        if self.fault("grasp-slip"):
+        if self.chance("grasp-slip"):
             self.inject("grasp-slip", f"pick {item}", f"{item} slipped out of the gripper")
             return False
         with self._lock:
@@ -238,7 +223,7 @@ class RechargeWorld(SimulatedWorld):
         room = self.room_of(robot)
         if room not in self.chargers or not self.holds("unplugged", robot):
             return False
-        if self.fault("plug-misaligned"):
+        if self.chance("plug-misaligned"):
             self.inject("plug-misaligned", f"plug-in {room}", "the plug missed the socket")
             return False
         with self._lock:

@@ -10,8 +10,9 @@ from __future__ import annotations
 
 import argparse
 import random
-import sys
 from collections.abc import Sequence
+
+from plan_bridge.problem_writer import both_ways, generator_main, pddl_problem
 
 ROBOT = "pr2"
 CART = "cart1"
@@ -65,32 +66,27 @@ def generate(objects: int, seed: int, name: str | None = None) -> str:
     zones = {item: rng.choice(TABLE_ZONES) for item in items}
     init = [f"(robot-at {ROBOT} table-n)", f"(cart-at {CART} table-n)", f"(hand-empty {ROBOT})"]
     for a, b in ADJACENT:
-        init += [f"(adjacent {a} {b})", f"(adjacent {b} {a})"]
+        init += both_ways(a, b, "adjacent")
     for a, b in PASSAGES:
-        init += [f"(passage {a} {b})", f"(passage {b} {a})", f"(clear {a} {b})", f"(clear {b} {a})"]
+        init += both_ways(a, b, "passage", "clear")
     for location, places in REACHES.items():
         init += [f"(reaches {location} {place})" for place in places]
     init += [f"(item-at {item} {zones[item]})" for item in items]
     goal = [f"(on-cart {item} {CART})" for item in items] + [f"(cart-at {CART} kitchen)"]
-    problem = name or f"clear-table-{objects}-s{seed}"
-    lines = [
-        f"; {objects} objects on the table (generate.py --objects {objects} --seed {seed})",
-        f"(define (problem {problem})",
-        "  (:domain table-clearing)",
-        "  (:objects",
-        f"    {ROBOT} - robot",
-        f"    {CART} - cart",
-        f"    {' '.join(LOCATIONS)} - location",
-        f"    {' '.join(TABLE_ZONES + FLOORS)} - spot",
-        f"    {' '.join(items)} - item)",
-        "  (:init",
-        *(f"    {fact}" for fact in init),
-        "  )",
-        "  (:goal (and",
-        *(f"    {fact}" for fact in goal),
-        "  )))",
-    ]
-    return "\n".join(lines) + "\n"
+    return pddl_problem(
+        name or f"clear-table-{objects}-s{seed}",
+        "table-clearing",
+        objects=[
+            f"{ROBOT} - robot",
+            f"{CART} - cart",
+            f"{' '.join(LOCATIONS)} - location",
+            f"{' '.join(TABLE_ZONES + FLOORS)} - spot",
+            f"{' '.join(items)} - item",
+        ],
+        init=init,
+        goal=goal,
+        comment=f"{objects} objects on the table (generate.py --objects {objects} --seed {seed})",
+    )
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -98,13 +94,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--objects", type=int, default=5, help="number of objects (default 5)")
     parser.add_argument("--seed", type=int, default=0, help="where the objects lie (default 0)")
     parser.add_argument("--name", help="problem name (default clear-table-N-sS)")
-    args = parser.parse_args(argv)
-    try:
-        text = generate(args.objects, args.seed, args.name)
-    except ValueError as exc:
-        parser.error(str(exc))
-    sys.stdout.write(text)
-    return 0
+    return generator_main(parser, lambda args: generate(args.objects, args.seed, args.name), argv)
 
 
 if __name__ == "__main__":

@@ -19,11 +19,11 @@ the floor, a corridor blocked on the fixed route to the kitchen.
 from __future__ import annotations
 
 import itertools
-from collections import deque
 
 import smach
 from plan_bridge.domain import Fact, PlanningTask
 from plan_bridge.mission import ScriptedMission
+from plan_bridge.skill_kit import fewest_hops
 
 from .skills import pick_machine, place_machine, push_machine
 from .world import TableWorld
@@ -35,22 +35,10 @@ OUTCOMES = ["done", "failed", "preempted"]
 
 def _route(edges: set[tuple[str, str]], start: str, goal: str) -> list[str]:
     """The shortest route over ``edges`` (the author's map), start and goal included."""
-    previous: dict[str, str | None] = {start: None}
-    queue = deque([start])
-    while queue:
-        here = queue.popleft()
-        if here == goal:
-            break
-        for a, b in sorted(edges):
-            if a == here and b not in previous:
-                previous[b] = here
-                queue.append(b)
-    if goal not in previous:
+    legs = fewest_hops(start, goal, lambda here: [(b, None) for a, b in sorted(edges) if a == here])
+    if legs is None:
         raise ValueError(f"the map has no route from {start} to {goal}")
-    route = [goal]
-    while (step := previous[route[-1]]) is not None:
-        route.append(step)
-    return route[::-1]
+    return [start, *(to for _, to, _ in legs)]
 
 
 class WalkTo(smach.State):
@@ -128,6 +116,15 @@ def scripted(task: PlanningTask, *, seed: int, fail_rate: float) -> ScriptedMiss
     route = _route(passages, cart_spot, kitchen)  # the fixed route to the kitchen
     legs = list(itertools.pairwise(route))
 
+    def add_walk(label: str, goal: str, arrived: str) -> None:
+        """Walk to the place in userdata ``goal`` along the author's map."""
+        smach.StateMachine.add(
+            label,
+            WalkTo(world, walkable),
+            transitions={"arrived": arrived, "failed": "failed"},
+            remapping={"goal": goal},
+        )
+
     clear_one = smach.StateMachine(
         outcomes=["cleared", "failed", "preempted"],
         input_keys=["entry", "robot", "cart", "cart_spot"],
@@ -148,12 +145,7 @@ def scripted(task: PlanningTask, *, seed: int, fail_rate: float) -> ScriptedMiss
         smach.StateMachine.add(
             "CHOOSE", smach.CBState(choose), transitions={"chosen": "GO_TO_OBJECT"}
         )
-        smach.StateMachine.add(
-            "GO_TO_OBJECT",
-            WalkTo(world, walkable),
-            transitions={"arrived": "PICK", "failed": "failed"},
-            remapping={"goal": "side"},
-        )
+        add_walk("GO_TO_OBJECT", "side", "PICK")
         smach.StateMachine.add(
             "PICK",
             pick_machine(world),
@@ -164,12 +156,7 @@ def scripted(task: PlanningTask, *, seed: int, fail_rate: float) -> ScriptedMiss
             RecoverPick(sides, floors),
             transitions={"retarget": "GO_TO_OBJECT", "retry": "PICK", "give_up": "failed"},
         )
-        smach.StateMachine.add(
-            "GO_TO_CART",
-            WalkTo(world, walkable),
-            transitions={"arrived": "PLACE", "failed": "failed"},
-            remapping={"goal": "cart_spot"},
-        )
+        add_walk("GO_TO_CART", "cart_spot", "PLACE")
         smach.StateMachine.add(
             "PLACE", place_machine(world), transitions={"succeeded": "cleared", "aborted": "failed"}
         )
@@ -218,12 +205,7 @@ def scripted(task: PlanningTask, *, seed: int, fail_rate: float) -> ScriptedMiss
         smach.StateMachine.add(
             "CLEAR_TABLE", clear_all, transitions={"cleared": "GO_TO_CART", "failed": "failed"}
         )
-        smach.StateMachine.add(
-            "GO_TO_CART",
-            WalkTo(world, walkable),
-            transitions={"arrived": "PUSH_TO_KITCHEN", "failed": "failed"},
-            remapping={"goal": "cart_spot"},
-        )
+        add_walk("GO_TO_CART", "cart_spot", "PUSH_TO_KITCHEN")
         smach.StateMachine.add(
             "PUSH_TO_KITCHEN", push_all, transitions={"arrived": "done", "failed": "failed"}
         )

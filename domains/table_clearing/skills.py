@@ -27,8 +27,9 @@ from collections.abc import Mapping
 from typing import Any
 
 import smach
-from plan_bridge.domain import Fact, PlanningTask
+from plan_bridge.domain import PlanningTask
 from plan_bridge.mission import MissionSetup
+from plan_bridge.skill_kit import RobotState, observe, skill_machine
 from plan_bridge.skills import SkillRegistry
 
 from .world import CartRun, TableWorld
@@ -42,7 +43,6 @@ __all__ = [
     "setup",
 ]
 
-SKILL_OUTCOMES = ["succeeded", "aborted", "preempted"]
 OBS = "observations"
 #: Real seconds the cart drive holds still waiting for the monitor (a safety net:
 #: the monitor answers within microseconds; this only ends a broken run).
@@ -51,66 +51,8 @@ HOLD_LIMIT_S = 10.0
 PUSH_ATTEMPTS = 3
 
 
-def _observe(ud: smach.UserData, *pairs: tuple[Fact, bool]) -> None:
-    """Add facts seen true/false to the machine's ``observations`` (copy on write)."""
-    seen: dict[Fact, bool] = dict(ud.observations)
-    seen.update(pairs)
-    ud.observations = seen
-
-
-def _machine(
-    outcomes: list[str], keys: list[str], bind: Mapping[str, Any] | None
-) -> smach.StateMachine:
-    """A skill machine reading ``keys``: bound in its own userdata, or input keys."""
-    sm = smach.StateMachine(
-        outcomes=outcomes, input_keys=[] if bind is not None else keys, output_keys=[OBS]
-    )
-    sm.userdata.observations = {}
-    # A machine run again (the scripted baseline reuses it) starts with fresh eyes.
-    sm.register_start_cb(_fresh_observations)
-    if bind is not None:
-        missing = [k for k in keys if k not in bind]
-        if missing:
-            raise ValueError(f"skill machine needs values for {missing}")
-        for key in keys:
-            sm.userdata[key] = bind[key]
-    return sm
-
-
-def _fresh_observations(ud: smach.UserData, initial_states: list[str]) -> None:
-    ud.observations = {}
-
-
-class RobotState(smach.State):
-    """A state acting on the simulated robot: it answers preempt requests first."""
-
-    def __init__(
-        self,
-        world: TableWorld,
-        outcomes: list[str],
-        input_keys: list[str] | None = None,
-        output_keys: list[str] | None = None,
-    ) -> None:
-        super().__init__(
-            outcomes=[*outcomes, "preempted"],
-            input_keys=input_keys or [],
-            output_keys=output_keys or [],
-            io_keys=[OBS],
-        )
-        self.world = world
-
-    def execute(self, ud: smach.UserData) -> str:
-        if self.preempt_requested():
-            self.service_preempt()
-            return "preempted"
-        return self.act(ud)
-
-    def act(self, ud: smach.UserData) -> str:
-        raise NotImplementedError
-
-
 # -- pick ------------------------------------------------------------------------------------
-class Detect(RobotState):
+class Detect(RobotState[TableWorld]):
     """Look for the object with the head camera; write where it lies (``object_spot``)."""
 
     def __init__(self, world: TableWorld) -> None:
@@ -127,14 +69,14 @@ class Detect(RobotState):
             return "not_seen"
         ud.object_spot = spot
         if spot != ud.expected_spot:
-            _observe(ud, (("item-at", ud.item, ud.expected_spot), False))
-        _observe(ud, (("item-at", ud.item, spot), True))
+            observe(ud, (("item-at", ud.item, ud.expected_spot), False))
+        observe(ud, (("item-at", ud.item, spot), True))
         if not self.world.reachable(ud.robot, spot):
             return "out_of_reach"
         return "found"
 
 
-class Approach(RobotState):
+class Approach(RobotState[TableWorld]):
     """Move the arm to the pre-grasp pose above the object."""
 
     def __init__(self, world: TableWorld) -> None:
@@ -144,7 +86,7 @@ class Approach(RobotState):
         return "ready" if self.world.approach(ud.robot, ud.target_spot) else "out_of_reach"
 
 
-class Grasp(RobotState):
+class Grasp(RobotState[TableWorld]):
     """Close the gripper around the object."""
 
     def __init__(self, world: TableWorld) -> None:
@@ -155,7 +97,7 @@ class Grasp(RobotState):
         return "closed"
 
 
-class VerifyGrasp(RobotState):
+class VerifyGrasp(RobotState[TableWorld]):
     """Check the gripper's force sensor; if empty, look where the object went."""
 
     def __init__(self, world: TableWorld) -> None:
@@ -166,27 +108,27 @@ class VerifyGrasp(RobotState):
     def act(self, ud: smach.UserData) -> str:
         robot, item, spot = ud.robot, ud.item, ud.target_spot
         if self.world.held_by(robot) == item:
-            _observe(
+            observe(
                 ud,
                 (("holding", robot, item), True),
                 (("hand-empty", robot), False),
                 (("item-at", item, spot), False),
             )
             return "picked"
-        _observe(ud, (("holding", robot, item), False), (("hand-empty", robot), True))
+        observe(ud, (("holding", robot, item), False), (("hand-empty", robot), True))
         seen = self.world.look(robot, item)
         if seen == spot:
-            _observe(ud, (("item-at", item, spot), True))
+            observe(ud, (("item-at", item, spot), True))
             return "slipped"
-        _observe(ud, (("item-at", item, spot), False))
+        observe(ud, (("item-at", item, spot), False))
         if seen is not None:
-            _observe(ud, (("item-at", item, seen), True))
+            observe(ud, (("item-at", item, seen), True))
         return "dropped"
 
 
 def pick_machine(world: TableWorld, bind: Mapping[str, Any] | None = None) -> smach.StateMachine:
     """DETECT -> GRASP_LOOP(APPROACH -> GRASP -> VERIFY); keys robot, item, spot."""
-    sm = _machine(SKILL_OUTCOMES, ["robot", "item", "spot"], bind)
+    sm = skill_machine(["robot", "item", "spot"], bind)
     detect = smach.Retry.wrap("LOOK", Detect(world), attempts=3, retry_outcomes=["not_seen"])
     attempt = smach.StateMachine(
         outcomes=["picked", "slipped", "dropped", "out_of_reach", "preempted"],
@@ -220,7 +162,7 @@ def pick_machine(world: TableWorld, bind: Mapping[str, Any] | None = None) -> sm
 
 
 # -- place -----------------------------------------------------------------------------------
-class CheckCart(RobotState):
+class CheckCart(RobotState[TableWorld]):
     """Is the cart next to the robot (the tray's fiducial in view)?"""
 
     def __init__(self, world: TableWorld) -> None:
@@ -230,13 +172,13 @@ class CheckCart(RobotState):
         here = self.world.robot_location(ud.robot)
         there = self.world.cart_location(ud.cart)
         if there is not None:
-            _observe(ud, (("cart-at", ud.cart, there), True))
+            observe(ud, (("cart-at", ud.cart, there), True))
         if here is not None and here != there:
-            _observe(ud, (("cart-at", ud.cart, here), False))
+            observe(ud, (("cart-at", ud.cart, here), False))
         return "present" if here is not None and here == there else "missing"
 
 
-class Release(RobotState):
+class Release(RobotState[TableWorld]):
     """Move the object above the cart's tray and open the gripper."""
 
     def __init__(self, world: TableWorld) -> None:
@@ -247,7 +189,7 @@ class Release(RobotState):
         return "released"
 
 
-class CheckPlaced(RobotState):
+class CheckPlaced(RobotState[TableWorld]):
     """Is the object on the tray and the gripper empty?"""
 
     def __init__(self, world: TableWorld) -> None:
@@ -259,7 +201,7 @@ class CheckPlaced(RobotState):
         robot, item, cart = ud.robot, ud.item, ud.cart
         on_cart = self.world.is_on_cart(item, cart)
         held = self.world.held_by(robot) == item
-        _observe(
+        observe(
             ud,
             (("on-cart", item, cart), on_cart),
             (("holding", robot, item), held),
@@ -272,7 +214,7 @@ class CheckPlaced(RobotState):
 
 def place_machine(world: TableWorld, bind: Mapping[str, Any] | None = None) -> smach.StateMachine:
     """CHECK_CART -> RELEASE_LOOP(RELEASE -> CHECK_PLACED); keys robot, item, cart."""
-    sm = _machine(SKILL_OUTCOMES, ["robot", "item", "cart"], bind)
+    sm = skill_machine(["robot", "item", "cart"], bind)
     attempt = smach.StateMachine(
         outcomes=["on_cart", "still_held", "lost", "preempted"],
         input_keys=["robot", "item", "cart", OBS],
@@ -296,7 +238,7 @@ def place_machine(world: TableWorld, bind: Mapping[str, Any] | None = None) -> s
 
 
 # -- push-cart -------------------------------------------------------------------------------
-class GripHandle(RobotState):
+class GripHandle(RobotState[TableWorld]):
     """Put both grippers on the cart's handle; start the run (``cart_run``)."""
 
     def __init__(self, world: TableWorld) -> None:
@@ -311,8 +253,8 @@ class GripHandle(RobotState):
         if not self.world.grip_handle(ud.robot, ud.cart):
             here = self.world.robot_location(ud.robot)
             there = self.world.cart_location(ud.cart)
-            _observe(ud, (("robot-at", ud.robot, ud.source), here == ud.source))
-            _observe(ud, (("cart-at", ud.cart, ud.source), there == ud.source))
+            observe(ud, (("robot-at", ud.robot, ud.source), here == ud.source))
+            observe(ud, (("cart-at", ud.cart, ud.source), there == ud.source))
             return "failed"
         ud.cart_run = self.world.start_push(ud.robot, ud.cart, ud.source, ud.target)
         return "gripped"
@@ -395,7 +337,7 @@ def _push_outcome(outcomes: Mapping[str, str | None]) -> str:
     return "aborted"
 
 
-class BackUp(RobotState):
+class BackUp(RobotState[TableWorld]):
     """Pull the cart back to free a jammed caster; give up after PUSH_ATTEMPTS pushes."""
 
     def __init__(self, world: TableWorld) -> None:
@@ -415,7 +357,7 @@ class BackUp(RobotState):
         return "retry"
 
 
-class ReportBlocked(RobotState):
+class ReportBlocked(RobotState[TableWorld]):
     """The laser sees the passage ahead blocked: tell the planner (both directions)."""
 
     def __init__(self, world: TableWorld) -> None:
@@ -423,7 +365,7 @@ class ReportBlocked(RobotState):
 
     def act(self, ud: smach.UserData) -> str:
         source, target = ud.source, ud.target
-        _observe(
+        observe(
             ud,
             (("clear", source, target), False),
             (("clear", target, source), False),
@@ -433,7 +375,7 @@ class ReportBlocked(RobotState):
         return "reported"
 
 
-class ReleaseHandle(RobotState):
+class ReleaseHandle(RobotState[TableWorld]):
     """Let go of the handle and localise robot and cart."""
 
     def __init__(self, world: TableWorld) -> None:
@@ -443,7 +385,7 @@ class ReleaseHandle(RobotState):
         here = self.world.robot_location(ud.robot)
         there = self.world.cart_location(ud.cart)
         for location in (ud.source, ud.target):
-            _observe(
+            observe(
                 ud,
                 (("robot-at", ud.robot, location), here == location),
                 (("cart-at", ud.cart, location), there == location),
@@ -453,7 +395,7 @@ class ReleaseHandle(RobotState):
 
 def push_machine(world: TableWorld, bind: Mapping[str, Any] | None = None) -> smach.StateMachine:
     """GRIP_HANDLE -> PUSH(DRIVE_CART || MONITOR_WHEELS) -> RELEASE_HANDLE, with BACK_UP."""
-    sm = _machine(SKILL_OUTCOMES, ["robot", "cart", "source", "target"], bind)
+    sm = skill_machine(["robot", "cart", "source", "target"], bind)
     sm.userdata.pushes = 0
     push = smach.Concurrence(
         outcomes=["arrived", "stuck", "blocked", "aborted", "preempted"],
@@ -494,7 +436,7 @@ def push_machine(world: TableWorld, bind: Mapping[str, Any] | None = None) -> sm
 
 
 # -- move ------------------------------------------------------------------------------------
-class DriveBase(RobotState):
+class DriveBase(RobotState[TableWorld]):
     """Drive the base (without the cart) to the goal location."""
 
     def __init__(self, world: TableWorld) -> None:
@@ -504,7 +446,7 @@ class DriveBase(RobotState):
         return "arrived" if self.world.walk(ud.robot, ud.source, ud.target) else "failed"
 
 
-class Localize(RobotState):
+class Localize(RobotState[TableWorld]):
     """Where is the robot now (AMCL)?"""
 
     def __init__(self, world: TableWorld) -> None:
@@ -512,7 +454,7 @@ class Localize(RobotState):
 
     def act(self, ud: smach.UserData) -> str:
         here = self.world.robot_location(ud.robot)
-        _observe(
+        observe(
             ud,
             (("robot-at", ud.robot, ud.source), here == ud.source),
             (("robot-at", ud.robot, ud.target), here == ud.target),
@@ -522,7 +464,7 @@ class Localize(RobotState):
 
 def move_machine(world: TableWorld, bind: Mapping[str, Any] | None = None) -> smach.StateMachine:
     """DRIVE_BASE -> LOCALIZE; keys robot, source, target."""
-    sm = _machine(SKILL_OUTCOMES, ["robot", "source", "target"], bind)
+    sm = skill_machine(["robot", "source", "target"], bind)
     with sm:
         smach.StateMachine.add(
             "DRIVE_BASE",

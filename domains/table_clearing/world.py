@@ -75,6 +75,8 @@ class CartRun:
 class TableWorld(SimulatedWorld):
     """The true state of the table-clearing mission, with seeded faults."""
 
+    fault_scale = FAULT_SCALE
+
     def __init__(self, task: PlanningTask, *, seed: int | None = 0, fail_rate: float = 0.0) -> None:
         super().__init__(task, seed=seed, fail_rate=fail_rate)
         self.robots = task.objects_of_type("robot")
@@ -87,22 +89,18 @@ class TableWorld(SimulatedWorld):
         self._judged: set[frozenset[str]] = set()
         for item in sorted(task.objects_of_type("item")):
             spot = self._spot_of(item)
-            if spot in self.table_zones and self._chance("misplaced"):
+            if spot in self.table_zones and self.chance("misplaced"):
                 elsewhere = [z for z in self.table_zones if z != spot]
                 truth = self.rng.choice(elsewhere)
                 self._facts.discard(("item-at", item, spot))
                 self._facts.add(("item-at", item, truth))
                 self.inject("misplaced", "", f"{item} lies in {truth}, not in {spot}")
-            if self._chance("occluded"):
+            if self.chance("occluded"):
                 looks = self.rng.randint(1, 4)
                 self._hidden[item] = looks
                 self.inject("occluded", "", f"{item} is hidden for {looks} look(s)")
 
     # -- helpers (call with the lock held where they touch facts) ----------------------------
-    def _chance(self, kind: str) -> bool:
-        probability = min(1.0, self.fail_rate * FAULT_SCALE[kind])
-        return probability > 0.0 and self.rng.random() < probability
-
     def _spend(self, activity: str, times: int = 1) -> None:
         self.sim_time += DURATIONS[activity] * times
 
@@ -192,7 +190,7 @@ class TableWorld(SimulatedWorld):
                 or ("hand-empty", robot) not in self._facts
             ):
                 return  # closes on air
-            if self._chance("grasp-slip"):
+            if self.chance("grasp-slip"):
                 floor = self._floor_near(here)
                 if floor is not None and self.rng.random() < FLOOR_SHARE:
                     self._facts.discard(("item-at", item, spot))
@@ -218,7 +216,7 @@ class TableWorld(SimulatedWorld):
                 here or "",
             ) not in self._facts:
                 return
-            if self._chance("release-stuck"):
+            if self.chance("release-stuck"):
                 self.inject("release-stuck", f"(place {robot} {item})", "the gripper did not open")
                 return
             self._facts.discard(("holding", robot, item))
@@ -264,7 +262,7 @@ class TableWorld(SimulatedWorld):
             corridor = not any(place.startswith("table") for place in passage)
             if passage not in self._judged and corridor and not self._blocked:
                 self._judged.add(passage)
-                if self._chance("corridor-blocked"):
+                if self.chance("corridor-blocked"):
                     self._blocked.add(passage)
                     self.inject(
                         "corridor-blocked",
@@ -273,7 +271,7 @@ class TableWorld(SimulatedWorld):
                     )
             if passage in self._blocked:
                 run.obstacle_at = 1 + self.rng.randrange(PUSH_SEGMENTS - 1)
-            elif self._chance("wheels-stalled"):
+            elif self.chance("wheels-stalled"):
                 run.stall_at = 1 + self.rng.randrange(PUSH_SEGMENTS - 1)
                 self.inject(
                     "wheels-stalled",

@@ -12,8 +12,9 @@ from __future__ import annotations
 
 import argparse
 import random
-import sys
 from collections.abc import Sequence
+
+from plan_bridge.problem_writer import both_ways, generator_main, pddl_problem
 
 ROOMS = ("office", "lab", "hall-west", "hall-east", "corridor", "storage-a", "storage-b")
 #: Doors (both ways).
@@ -50,25 +51,19 @@ def generate(items: int, seed: int, name: str | None = None) -> str:
             init += [f"(item-at {item} {store})", f"(suits {robot} {item})"]
             goal.append(f"(item-at {item} {rng.choice(DESTINATIONS)})")
     for a, b in DOORS:
-        init += [f"(connected {a} {b})", f"(connected {b} {a})"]
-        init += [f"(passable {a} {b})", f"(passable {b} {a})"]
-    problem = name or f"deliver-{items}x2-s{seed}"
-    lines = [
-        f"; {items} item(s) per robot (generate.py --items {items} --seed {seed})",
-        f"(define (problem {problem})",
-        "  (:domain two-robot-delivery)",
-        "  (:objects",
-        f"    {' '.join(ROBOTS)} - robot",
-        f"    {' '.join(ROOMS)} - room",
-        f"    {' '.join(objects)} - item)",
-        "  (:init",
-        *(f"    {fact}" for fact in init),
-        "  )",
-        "  (:goal (and",
-        *(f"    {fact}" for fact in goal),
-        "  )))",
-    ]
-    return "\n".join(lines) + "\n"
+        init += both_ways(a, b, "connected", "passable")
+    return pddl_problem(
+        name or f"deliver-{items}x2-s{seed}",
+        "two-robot-delivery",
+        objects=[
+            f"{' '.join(ROBOTS)} - robot",
+            f"{' '.join(ROOMS)} - room",
+            f"{' '.join(objects)} - item",
+        ],
+        init=init,
+        goal=goal,
+        comment=f"{items} item(s) per robot (generate.py --items {items} --seed {seed})",
+    )
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -76,13 +71,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--items", type=int, default=2, help="items per robot (default 2)")
     parser.add_argument("--seed", type=int, default=0, help="chooses the destinations (default 0)")
     parser.add_argument("--name", help="problem name (default deliver-Nx2-sS)")
-    args = parser.parse_args(argv)
-    try:
-        text = generate(args.items, args.seed, args.name)
-    except ValueError as exc:
-        parser.error(str(exc))
-    sys.stdout.write(text)
-    return 0
+    return generator_main(parser, lambda args: generate(args.items, args.seed, args.name), argv)
 
 
 if __name__ == "__main__":

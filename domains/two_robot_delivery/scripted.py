@@ -16,12 +16,10 @@ falls off on the way.
 
 from __future__ import annotations
 
-import itertools
-from collections import deque
-
 import smach
 from plan_bridge.domain import PlanningTask
 from plan_bridge.mission import ScriptedMission
+from plan_bridge.skill_kit import fewest_hops
 
 from .skills import drop_machine, move_machine, pick_machine
 from .world import DeliveryWorld
@@ -34,21 +32,10 @@ SECOND_TRIES = 1
 
 def shortest_route(doors: set[tuple[str, str]], start: str, goal: str) -> list[tuple[str, str]]:
     """The legs of the shortest route over ``doors`` (the author's map)."""
-    previous: dict[str, str | None] = {start: None}
-    queue = deque([start])
-    while queue:
-        here = queue.popleft()
-        for a, b in sorted(doors):
-            if a == here and b not in previous:
-                previous[b] = here
-                queue.append(b)
-    if goal not in previous:
+    legs = fewest_hops(start, goal, lambda here: [(b, None) for a, b in sorted(doors) if a == here])
+    if legs is None:
         raise ValueError(f"the map has no route from {start} to {goal}")
-    rooms = [goal]
-    while (room := previous[rooms[-1]]) is not None:
-        rooms.append(room)
-    rooms.reverse()
-    return list(itertools.pairwise(rooms))
+    return [(a, b) for a, b, _ in legs]
 
 
 class PlanRoute(smach.State):
@@ -143,40 +130,28 @@ def robot_machine(
         smach.StateMachine.add(
             "TAKE_JOB", smach.CBState(take_job), transitions={"go": "GO_TO_STORE"}
         )
-        smach.StateMachine.add(
-            "GO_TO_STORE",
-            route_machine(world, doors),
-            transitions={"arrived": "PICK", "failed": "failed"},
-            remapping={"goal": "store"},
-        )
-        smach.StateMachine.add(
-            "PICK",
-            pick_machine(world),
-            transitions={"succeeded": "GO_TO_DESTINATION", "aborted": "PICK_AGAIN"},
-            remapping={"room": "store"},
-        )
-        smach.StateMachine.add(
-            "PICK_AGAIN",
-            smach.CBState(try_again),
-            transitions={"again": "PICK", "give_up": "failed"},
-        )
-        smach.StateMachine.add(
-            "GO_TO_DESTINATION",
-            route_machine(world, doors),
-            transitions={"arrived": "DROP", "failed": "failed"},
-            remapping={"goal": "destination"},
-        )
-        smach.StateMachine.add(
-            "DROP",
-            drop_machine(world),
-            transitions={"succeeded": "delivered", "aborted": "DROP_AGAIN"},
-            remapping={"room": "destination"},
-        )
-        smach.StateMachine.add(
-            "DROP_AGAIN",
-            smach.CBState(try_again),
-            transitions={"again": "DROP", "give_up": "failed"},
-        )
+        # Go to the store and PICK, then to the destination and DROP (each one more try).
+        for key, act, machine, then in (
+            ("store", "PICK", pick_machine, "GO_TO_DESTINATION"),
+            ("destination", "DROP", drop_machine, "delivered"),
+        ):
+            smach.StateMachine.add(
+                f"GO_TO_{key.upper()}",
+                route_machine(world, doors),
+                transitions={"arrived": act, "failed": "failed"},
+                remapping={"goal": key},
+            )
+            smach.StateMachine.add(
+                act,
+                machine(world),
+                transitions={"succeeded": then, "aborted": f"{act}_AGAIN"},
+                remapping={"room": key},
+            )
+            smach.StateMachine.add(
+                f"{act}_AGAIN",
+                smach.CBState(try_again),
+                transitions={"again": act, "give_up": "failed"},
+            )
     jobs_loop = smach.Iterator(
         outcomes=["done", "failed", "preempted"],
         input_keys=[],

@@ -20,73 +20,20 @@ from collections.abc import Mapping
 from typing import Any
 
 import smach
-from plan_bridge.domain import Fact, PlanningTask
+from plan_bridge.domain import PlanningTask
 from plan_bridge.mission import MissionSetup
+from plan_bridge.skill_kit import RobotState, observe, skill_machine
 from plan_bridge.skills import SkillRegistry
 
 from .world import DeliveryWorld
 
 __all__ = ["build_skills", "drop_machine", "move_machine", "pick_machine", "setup"]
 
-SKILL_OUTCOMES = ["succeeded", "aborted", "preempted"]
 OBS = "observations"
 
 
-def _observe(ud: smach.UserData, *pairs: tuple[Fact, bool]) -> None:
-    """Add facts seen true/false to the machine's ``observations`` (copy on write)."""
-    seen: dict[Fact, bool] = dict(ud.observations)
-    seen.update(pairs)
-    ud.observations = seen
-
-
-def _fresh_observations(ud: smach.UserData, initial_states: list[str]) -> None:
-    ud.observations = {}
-
-
-def _machine(keys: list[str], bind: Mapping[str, Any] | None) -> smach.StateMachine:
-    """A skill machine reading ``keys``: bound in its own userdata, or input keys."""
-    sm = smach.StateMachine(
-        outcomes=SKILL_OUTCOMES, input_keys=[] if bind is not None else keys, output_keys=[OBS]
-    )
-    sm.userdata.observations = {}
-    # A machine run again (the scripted baseline reuses it) starts with fresh eyes.
-    sm.register_start_cb(_fresh_observations)
-    if bind is not None:
-        for key in keys:
-            sm.userdata[key] = bind[key]
-    return sm
-
-
-class RobotState(smach.State):
-    """A state acting on one simulated robot: it answers preempt requests first."""
-
-    def __init__(
-        self,
-        world: DeliveryWorld,
-        outcomes: list[str],
-        input_keys: list[str] | None = None,
-        output_keys: list[str] | None = None,
-    ) -> None:
-        super().__init__(
-            outcomes=[*outcomes, "preempted"],
-            input_keys=input_keys or [],
-            output_keys=output_keys or [],
-            io_keys=[OBS],
-        )
-        self.world = world
-
-    def execute(self, ud: smach.UserData) -> str:
-        if self.preempt_requested():
-            self.service_preempt()
-            return "preempted"
-        return self.act(ud)
-
-    def act(self, ud: smach.UserData) -> str:
-        raise NotImplementedError
-
-
 # -- move ------------------------------------------------------------------------------------
-class CheckGripper(RobotState):
+class CheckGripper(RobotState[DeliveryWorld]):
     """What does the robot carry as it sets off (``carrying``: an item or None)?"""
 
     def __init__(self, world: DeliveryWorld) -> None:
@@ -97,7 +44,7 @@ class CheckGripper(RobotState):
         return "checked"
 
 
-class CheckDoor(RobotState):
+class CheckDoor(RobotState[DeliveryWorld]):
     """Look at the door ahead; report a blocked one as not passable, both ways."""
 
     def __init__(self, world: DeliveryWorld) -> None:
@@ -106,7 +53,7 @@ class CheckDoor(RobotState):
     def act(self, ud: smach.UserData) -> str:
         if self.world.door_open(ud.robot, ud.source, ud.target):
             return "open"
-        _observe(
+        observe(
             ud,
             (("passable", ud.source, ud.target), False),
             (("passable", ud.target, ud.source), False),
@@ -114,7 +61,7 @@ class CheckDoor(RobotState):
         return "blocked"
 
 
-class Drive(RobotState):
+class Drive(RobotState[DeliveryWorld]):
     """Drive through the door to the next room."""
 
     def __init__(self, world: DeliveryWorld) -> None:
@@ -126,7 +73,7 @@ class Drive(RobotState):
         return self.world.drive(ud.robot, ud.source, ud.target)
 
 
-class CheckLoad(RobotState):
+class CheckLoad(RobotState[DeliveryWorld]):
     """Localise, and check that the carried item is still in the gripper."""
 
     def __init__(self, world: DeliveryWorld) -> None:
@@ -137,7 +84,7 @@ class CheckLoad(RobotState):
     def act(self, ud: smach.UserData) -> str:
         robot = ud.robot
         here = self.world.location(robot)
-        _observe(
+        observe(
             ud,
             (("at", robot, ud.source), here == ud.source),
             (("at", robot, ud.target), here == ud.target),
@@ -149,7 +96,7 @@ class CheckLoad(RobotState):
         if held == carried:
             return "ok" if here == ud.target else "lost"
         # The item fell off on the way out: it lies in the room the robot left.
-        _observe(
+        observe(
             ud,
             (("holding", robot, carried), False),
             (("hand-empty", robot), held is None),
@@ -160,7 +107,7 @@ class CheckLoad(RobotState):
 
 def move_machine(world: DeliveryWorld, bind: Mapping[str, Any] | None = None) -> smach.StateMachine:
     """CHECK_GRIPPER -> CHECK_DOOR -> DRIVE (Retry) -> CHECK_LOAD; keys robot, source, target."""
-    sm = _machine(["robot", "source", "target"], bind)
+    sm = skill_machine(["robot", "source", "target"], bind)
     with sm:
         smach.StateMachine.add(
             "CHECK_GRIPPER", CheckGripper(world), transitions={"checked": "CHECK_DOOR"}
@@ -180,7 +127,7 @@ def move_machine(world: DeliveryWorld, bind: Mapping[str, Any] | None = None) ->
 
 
 # -- pick ------------------------------------------------------------------------------------
-class Detect(RobotState):
+class Detect(RobotState[DeliveryWorld]):
     """Find the item on the shelves of this room."""
 
     def __init__(self, world: DeliveryWorld) -> None:
@@ -188,11 +135,11 @@ class Detect(RobotState):
 
     def act(self, ud: smach.UserData) -> str:
         seen = self.world.sees(ud.robot, ud.item)
-        _observe(ud, (("item-at", ud.item, ud.room), seen))
+        observe(ud, (("item-at", ud.item, ud.room), seen))
         return "found" if seen else "missing"
 
 
-class Grasp(RobotState):
+class Grasp(RobotState[DeliveryWorld]):
     def __init__(self, world: DeliveryWorld) -> None:
         super().__init__(world, ["closed"], input_keys=["robot", "item"])
 
@@ -201,7 +148,7 @@ class Grasp(RobotState):
         return "closed"
 
 
-class VerifyGrasp(RobotState):
+class VerifyGrasp(RobotState[DeliveryWorld]):
     """Is the item in the gripper (force sensor)?"""
 
     def __init__(self, world: DeliveryWorld) -> None:
@@ -210,7 +157,7 @@ class VerifyGrasp(RobotState):
     def act(self, ud: smach.UserData) -> str:
         robot, item = ud.robot, ud.item
         held = self.world.held_by(robot) == item
-        _observe(
+        observe(
             ud,
             (("holding", robot, item), held),
             (("hand-empty", robot), not held),
@@ -221,7 +168,7 @@ class VerifyGrasp(RobotState):
 
 def pick_machine(world: DeliveryWorld, bind: Mapping[str, Any] | None = None) -> smach.StateMachine:
     """DETECT -> GRASP_LOOP(GRASP -> VERIFY); keys robot, item, room."""
-    sm = _machine(["robot", "item", "room"], bind)
+    sm = skill_machine(["robot", "item", "room"], bind)
     attempt = smach.StateMachine(
         outcomes=["picked", "slipped", "preempted"],
         input_keys=["robot", "item", "room", OBS],
@@ -243,7 +190,7 @@ def pick_machine(world: DeliveryWorld, bind: Mapping[str, Any] | None = None) ->
 
 
 # -- drop ------------------------------------------------------------------------------------
-class Release(RobotState):
+class Release(RobotState[DeliveryWorld]):
     """Put the item on the desk and open the gripper."""
 
     def __init__(self, world: DeliveryWorld) -> None:
@@ -254,7 +201,7 @@ class Release(RobotState):
         return "released"
 
 
-class CheckReleased(RobotState):
+class CheckReleased(RobotState[DeliveryWorld]):
     """Is the gripper empty and the item on the desk (camera)?"""
 
     def __init__(self, world: DeliveryWorld) -> None:
@@ -266,7 +213,7 @@ class CheckReleased(RobotState):
         robot, item = ud.robot, ud.item
         held = self.world.held_by(robot) == item
         on_desk = not held and self.world.sees(robot, item)
-        _observe(
+        observe(
             ud,
             (("holding", robot, item), held),
             (("hand-empty", robot), not held),
@@ -279,7 +226,7 @@ class CheckReleased(RobotState):
 
 def drop_machine(world: DeliveryWorld, bind: Mapping[str, Any] | None = None) -> smach.StateMachine:
     """RELEASE_LOOP(RELEASE -> CHECK_RELEASED); keys robot, item, room."""
-    sm = _machine(["robot", "item", "room"], bind)
+    sm = skill_machine(["robot", "item", "room"], bind)
     attempt = smach.StateMachine(
         outcomes=["delivered", "still_held", "lost", "preempted"],
         input_keys=["robot", "item", "room", OBS],

@@ -58,6 +58,8 @@ BLOCKABLE = ("office", "lab", "hall-west", "hall-east", "corridor")
 class DeliveryWorld(SimulatedWorld):
     """The true state of the two-robot delivery mission, with seeded faults."""
 
+    fault_scale = FAULT_SCALE
+
     def __init__(self, task: PlanningTask, *, seed: int | None = 0, fail_rate: float = 0.0) -> None:
         super().__init__(task, seed=seed, fail_rate=fail_rate)
         self.robots = tuple(sorted(task.objects_of_type("robot")))
@@ -73,7 +75,7 @@ class DeliveryWorld(SimulatedWorld):
             key=sorted,
         )
         self.blocked_door: frozenset[str] | None = None
-        if doors and self._chance(self.rng, "door-blocked"):
+        if doors and self.chance("door-blocked"):
             self.blocked_door = self.rng.choice(doors)
 
     # -- time and faults --------------------------------------------------------------------
@@ -94,10 +96,6 @@ class DeliveryWorld(SimulatedWorld):
 
     def _spend(self, robot: str, activity: str) -> None:
         self._clock[robot] += DURATIONS[activity]
-
-    def _chance(self, rng: random.Random, kind: str) -> bool:
-        probability = min(1.0, self.fail_rate * FAULT_SCALE[kind])
-        return probability > 0.0 and rng.random() < probability
 
     def inject(
         self, kind: str, action: str, detail: str = "", *, robot: str | None = None
@@ -166,7 +164,7 @@ class DeliveryWorld(SimulatedWorld):
             if frozenset((source, target)) == self.blocked_door:
                 return "failed"
             rng = self._rngs[robot]
-            if self._chance(rng, "nav-stalled"):
+            if self.chance("nav-stalled", rng):
                 self._spend(robot, "stalled")
                 self.inject(
                     "nav-stalled",
@@ -177,7 +175,7 @@ class DeliveryWorld(SimulatedWorld):
                 return "stalled"
             self._spend(robot, "drive")
             held = next((f[2] for f in self._facts if f[0] == "holding" and f[1] == robot), None)
-            if held is not None and self._chance(rng, "item-dropped"):
+            if held is not None and self.chance("item-dropped", rng):
                 self._facts.discard(("holding", robot, held))
                 self._facts.add(("hand-empty", robot))
                 self._facts.add(("item-at", held, source))
@@ -201,7 +199,7 @@ class DeliveryWorld(SimulatedWorld):
                 robot,
             ) not in self._facts:
                 return
-            if self._chance(self._rngs[robot], "grasp-slip"):
+            if self.chance("grasp-slip", self._rngs[robot]):
                 self.inject(
                     "grasp-slip", f"(pick {robot} {item} {here})", "back on the shelf", robot=robot
                 )
@@ -217,7 +215,7 @@ class DeliveryWorld(SimulatedWorld):
             here = next((f[2] for f in self._facts if f[0] == "at" and f[1] == robot), "")
             if ("holding", robot, item) not in self._facts:
                 return
-            if self._chance(self._rngs[robot], "release-stuck"):
+            if self.chance("release-stuck", self._rngs[robot]):
                 self.inject(
                     "release-stuck",
                     f"(drop {robot} {item} {here})",

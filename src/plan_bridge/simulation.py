@@ -12,9 +12,9 @@ from __future__ import annotations
 import dataclasses
 import random
 import threading
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 import smach
 from plan_bridge.domain import Fact, PlanningTask
@@ -40,12 +40,17 @@ class SimulatedWorld:
 
     Domain worlds subclass it: they keep the true PDDL facts in :attr:`_facts`
     (under :attr:`_lock`), advance :attr:`sim_time` (simulated robot seconds) as the
-    robot acts, and record every fault they inject with :meth:`inject`, so that runs
-    can be compared (``plan-bridge study``).
+    robot acts, draw their faults with :meth:`chance` and record every fault they
+    inject with :meth:`inject`, so that runs can be compared (``plan-bridge study``).
     """
 
     #: Simulated seconds one symbolic action takes.
     action_duration = 1.0
+    #: Probability of each kind of fault per unit of ``fail_rate`` (see :meth:`chance`).
+    fault_scale: ClassVar[Mapping[str, float]] = {}
+    #: The variants of the world a domain offers (``plan-bridge study --variant``), such as
+    #: a fault its scripted baseline was not written for; ``""`` is the ordinary world.
+    variants: ClassVar[tuple[str, ...]] = ("",)
 
     def __init__(
         self,
@@ -54,13 +59,17 @@ class SimulatedWorld:
         seed: int | None = 0,
         fail_rate: float = 0.0,
         facts: Iterable[Fact] | None = None,
+        variant: str = "",
     ) -> None:
+        if variant not in self.variants:
+            raise ValueError(f"unknown variant {variant!r}; variants: {', '.join(self.variants)}")
         if not 0.0 <= fail_rate <= 1.0:
             raise ValueError(f"fail_rate must be between 0 and 1, got {fail_rate}")
         self.task = task
         self.model = ActionModel(task)
         self.rng = random.Random(seed)
         self.fail_rate = fail_rate
+        self.variant = variant
         self._facts: set[Fact] = set(task.initial_facts if facts is None else facts)
         self._lock = threading.Lock()
         self.faults: list[Fault] = []
@@ -70,6 +79,17 @@ class SimulatedWorld:
     @property
     def faults_injected(self) -> int:
         return len(self.faults)
+
+    def chance(self, kind: str, rng: random.Random | None = None) -> bool:
+        """Draw whether a fault of ``kind`` happens now.
+
+        Its probability is ``fail_rate x fault_scale[kind]``, at most 1, drawn from
+        ``rng`` (default: the world's seeded :attr:`rng`). A probability of 0 draws
+        nothing, so a run without faults uses no random numbers. Only decides: record
+        the fault with :meth:`inject` where it happens.
+        """
+        probability = min(1.0, self.fail_rate * self.fault_scale[kind])
+        return probability > 0.0 and (self.rng if rng is None else rng).random() < probability
 
     def inject(self, kind: str, action: str, detail: str = "", time: float | None = None) -> Fault:
         """Record a fault (call it where the world decides one happens).
@@ -110,6 +130,11 @@ class SimulatedWorld:
     def facts(self) -> frozenset[Fact]:
         with self._lock:
             return frozenset(self._facts)
+
+    def holds(self, *fact: str) -> bool:
+        """Whether a fact is true in the world: ``world.holds("at", "pr2", "kitchen")``."""
+        with self._lock:
+            return fact in self._facts
 
     def perform(self, step: PlanStep) -> tuple[bool, list[tuple[Fact, bool]]]:
         """Try ``step`` in the world: (succeeded?, observations of the touched facts)."""

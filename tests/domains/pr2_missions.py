@@ -1,8 +1,10 @@
-"""Harness of the fetch_drink, door_opening and recharge mission tests.
+"""Harness of the mission tests (domains/*): what every mission is run and checked with.
 
 It runs a mission planned (the executive with the domain's skills) or scripted (the
-domain's hand-written baseline) for one seed and fault rate, and summarises sweeps
-over seeds. Planner answers are memoised across runs (see :class:`MemoPlanner`).
+domain's hand-written baseline) for one seed and fault rate, and sweeps over seeds.
+Planner answers are memoised across runs (see :class:`MemoPlanner`), and the planners
+and the 20-seed sweeps are made once per test session, so that the checks of several
+test files share them.
 """
 
 from __future__ import annotations
@@ -13,15 +15,16 @@ import threading
 import time
 from collections.abc import Iterable, Sequence
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cache
 from pathlib import Path
 from typing import Any
 
 from plan_bridge.domain import Fact, FactLike, PlanningTask, parse_fact
 from plan_bridge.executive import Executive
-from plan_bridge.mission import Target, load_target
-from plan_bridge.planning import Planner, PlanResult, PlanStatus
+from plan_bridge.mission import MissionSetup, Target, load_target
+from plan_bridge.planning import Planner, PlanResult, PlanStatus, get_planner
+from smach.testing import EventRecorder
 
 REPO = Path(__file__).resolve().parents[2]
 DOMAINS = REPO / "domains"
@@ -29,6 +32,38 @@ PLAN_BRIDGE = Path(sys.executable).parent / "plan-bridge"
 
 #: The outcomes a mission may end with; anything else (an exception, a hang) is a bug.
 DEFINED_OUTCOMES = ("succeeded", "aborted")
+SEEDS = range(20)
+RATES = (0.1, 0.2)
+
+
+@dataclass(frozen=True)
+class Mission:
+    """How a mission is swept over seeds and what its runs must show."""
+
+    name: str
+    sweep: str
+    """The problem of the 20-seed sweeps."""
+    planner: str
+    """The planner of the sweeps: pyperplan where Fast Downward would take too long."""
+    seed: int
+    """A seed whose run at fault rate 0.2 is run again to check it is reproducible."""
+    min_faults: int
+    """Faults at least over a sweep (the faults are real)."""
+    scripted_outcomes: tuple[str, ...] = DEFINED_OUTCOMES
+    """The outcomes of the scripted baseline, success first."""
+
+    def __str__(self) -> str:
+        return self.name
+
+
+MISSIONS = (
+    Mission("door_opening", "p02", "fast-downward", seed=5, min_faults=20),
+    Mission("fetch_drink", "p01", "fast-downward", seed=7, min_faults=10),
+    Mission("recharge", "p02", "fast-downward", seed=3, min_faults=10),
+    Mission("table_clearing", "p01", "pyperplan", 2, 10, ("done", "failed", "preempted")),
+    Mission("two_robot_delivery", "p01", "pyperplan", 1, 10, ("done", "failed", "preempted")),
+)
+BY_NAME = {m.name: m for m in MISSIONS}
 
 
 class MemoPlanner:
@@ -85,9 +120,15 @@ def target(name: str, problem: str | None = None) -> Target:
     return load_target(DOMAINS / name, problem)
 
 
+@cache
+def planner(engine: str = "fast-downward") -> MemoPlanner:
+    """The session's memoising planner of ``engine``."""
+    return MemoPlanner(get_planner(engine))
+
+
 @dataclass(frozen=True)
 class Run:
-    """One mission run."""
+    """One mission run: everything that must be the same for the same seed (and wall time)."""
 
     mode: str
     seed: int
@@ -95,29 +136,67 @@ class Run:
     goal_reached: bool
     faults: int
     sim_time: float
-    wall_s: float
+    wall_s: float = field(compare=False)
     planner_calls: int = 0
     executed: tuple[str, ...] = ()
     fault_log: tuple[tuple[float, str, str, str], ...] = ()
+    """(time, kind, action, detail) per fault; sorted where robots may act concurrently."""
+    decisions: tuple[str, ...] = ()
+    facts: frozenset[Fact] = frozenset()
+    """The true facts of the world at the end."""
 
 
-def run_planned(mission: Target, seed: int, fail_rate: float, planner: Planner) -> Run:
-    started = time.monotonic()
-    setup = mission.setup(seed=seed, fail_rate=fail_rate)
-    executive = Executive(mission.task, setup.skills, planner, sense=setup.sense)
-    outcome = executive.execute() or ""
-    world = setup.world
+def _run(
+    mode: str, seed: int, outcome: str, world: Any, started: float, *, concurrent: bool, **more: Any
+) -> Run:
+    """The :class:`Run` of a run that ended with ``outcome`` in ``world``.
+
+    ``concurrent``: robots acted at the same time, so the fault log, interleaved by
+    thread timing, is sorted (each fault has its robot's clock).
+    """
+    log = [(f.time, f.kind, f.action, f.detail) for f in world.faults]
     return Run(
-        "planned",
+        mode,
         seed,
         outcome,
         world.goal_reached(),
         world.faults_injected,
         world.sim_time,
         time.monotonic() - started,
-        executive.report.planner_calls,
-        tuple(executive.report.executed),
-        tuple((f.time, f.kind, f.action, f.detail) for f in world.faults),
+        fault_log=tuple(sorted(log) if concurrent else log),
+        facts=world.facts,
+        **more,
+    )
+
+
+def run_planned(
+    mission: Target,
+    seed: int,
+    fail_rate: float,
+    planner: Planner,
+    recorder: EventRecorder | None = None,
+) -> Run:
+    started = time.monotonic()
+    setup = mission.setup(seed=seed, fail_rate=fail_rate)
+    executive = Executive(
+        mission.task, setup.skills, planner, sense=setup.sense, concurrent=setup.concurrent
+    )
+    if recorder is not None:
+        executive.add_listener(recorder)
+    outcome = executive.execute() or ""
+    # The executive's belief follows the world: it claims success exactly when it is true.
+    assert executive.report.goal_reached == setup.world.goal_reached()
+    report = executive.report
+    return _run(
+        "planned",
+        seed,
+        outcome,
+        setup.world,
+        started,
+        concurrent=setup.concurrent,
+        planner_calls=report.planner_calls,
+        executed=tuple(sorted(report.executed) if setup.concurrent else report.executed),
+        decisions=tuple(d["decision"] for d in report.decisions),
     )
 
 
@@ -126,17 +205,17 @@ def run_scripted(mission: Target, seed: int, fail_rate: float) -> Run:
     assert mission.module is not None
     baseline = mission.module.scripted(mission.task, seed=seed, fail_rate=fail_rate)
     outcome = baseline.machine.execute() or ""
-    world = baseline.world
-    return Run(
-        "scripted",
-        seed,
-        outcome,
-        world.goal_reached(),
-        world.faults_injected,
-        world.sim_time,
-        time.monotonic() - started,
-        fault_log=tuple((f.time, f.kind, f.action, f.detail) for f in world.faults),
-    )
+    # A hand-written machine may run robots concurrently too (two_robot_delivery).
+    return _run("scripted", seed, outcome, baseline.world, started, concurrent=True)
+
+
+def setup_with_fault(mission: Target, kind: str, fail_rate: float = 0.1) -> MissionSetup:
+    """The setup of the first seed whose world starts with a fault of ``kind``."""
+    for seed in SEEDS:
+        setup = mission.setup(seed=seed, fail_rate=fail_rate)
+        if any(f.kind == kind for f in setup.world.faults):
+            return setup
+    raise AssertionError(f"no seed of {list(SEEDS)} starts with a fault {kind!r}")
 
 
 def sweep_planned(
@@ -149,6 +228,15 @@ def sweep_planned(
     """
     with ThreadPoolExecutor(max_workers=2, thread_name_prefix="mission") as pool:
         return list(pool.map(lambda seed: run_planned(mission, seed, fail_rate, planner), seeds))
+
+
+@cache
+def sweep(name: str, fail_rate: float) -> tuple[Run, ...]:
+    """The planned runs of ``name``'s sweep problem over :data:`SEEDS` (once a session)."""
+    mission = BY_NAME[name]
+    return tuple(
+        sweep_planned(target(name, mission.sweep), SEEDS, fail_rate, planner(mission.planner))
+    )
 
 
 def success_rate(runs: Sequence[Run]) -> float:
