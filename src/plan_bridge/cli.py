@@ -181,16 +181,23 @@ def _run_plan(args: argparse.Namespace) -> int:
         return fail(str(exc))
 
     from plan_bridge.domain import load_task
-    from plan_bridge.planning import PlanStatus, get_planner
+    from plan_bridge.planning import PlanStatus, UPPlanner, get_planner
     from plan_bridge.worker import default_pool
 
+    planners: list[UPPlanner] = []
     try:
         progress(f"loading {args.domain} and {args.problem}...")
-        # A planner process starts now and parses the task while we do.
-        task = load_task(args.domain, args.problem, prime=default_pool())
-        planner = get_planner(args.planner)
+        # A planner process parses the task while we parse it (prime); the planner
+        # name is checked before our parse, so a wrong one is reported at once.
+        task = load_task(
+            args.domain,
+            args.problem,
+            prime=default_pool(),
+            before_parse=lambda: planners.append(get_planner(args.planner)),
+        )
     except PlanBridgeError as exc:
         return fail(str(exc))
+    planner = planners[0]
     progress(f"planning with {planner.name} (timeout {args.timeout:g} s)...")
     try:
         result = planner.solve(task, timeout=args.timeout)

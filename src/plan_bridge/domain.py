@@ -16,7 +16,7 @@ from __future__ import annotations
 import dataclasses
 import re
 import warnings
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
@@ -252,6 +252,7 @@ def load_task(
     max_bytes: int = DEFAULT_MAX_BYTES,
     max_depth: int = DEFAULT_MAX_DEPTH,
     prime: WorkerPool | None = None,
+    before_parse: Callable[[], object] | None = None,
 ) -> PlanningTask:
     """Load a PDDL domain and problem file.
 
@@ -262,13 +263,17 @@ def load_task(
     ``prime``: a planner worker pool (e.g. ``default_pool()``) that starts parsing
     the same text in a planner process while this process parses it, so the first
     solve does not parse again (:meth:`WorkerPool.prime`). Pass it when the task
-    will be planned.
+    will be planned. ``before_parse`` is called once the files passed the cheap
+    checks, before unified-planning parses them (the CLI checks the planner name
+    there, so an unknown planner is reported before a parse of several seconds).
     """
     domain_source = read_source(domain, "domain", max_bytes=max_bytes)
     check_source(domain_source, max_depth=max_depth)
     problem_source = read_source(problem, "problem", max_bytes=max_bytes)
     check_source(problem_source, max_depth=max_depth)
     _prime(prime, domain_source, problem_source)
+    if before_parse is not None:
+        before_parse()
     up_problem, notes = _parse(domain_source, problem_source)
     task = task_from_problem(
         up_problem, domain_path=Path(domain), problem_path=Path(problem), warnings=notes
@@ -286,6 +291,7 @@ def load_task_from_text(
     problem_name: str = "<problem>",
     max_depth: int = DEFAULT_MAX_DEPTH,
     prime: WorkerPool | None = None,
+    before_parse: Callable[[], object] | None = None,
 ) -> PlanningTask:
     """Like :func:`load_task` for PDDL held in strings (names are used in errors)."""
     domain_source = decode_source(domain_text.encode("utf-8"), domain_name, "domain")
@@ -293,6 +299,8 @@ def load_task_from_text(
     problem_source = decode_source(problem_text.encode("utf-8"), problem_name, "problem")
     check_source(problem_source, max_depth=max_depth)
     _prime(prime, domain_source, problem_source)
+    if before_parse is not None:
+        before_parse()
     up_problem, notes = _parse(domain_source, problem_source)
     task = task_from_problem(up_problem, warnings=notes)
     return dataclasses.replace(

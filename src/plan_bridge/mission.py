@@ -106,12 +106,16 @@ class Target:
 
 
 def load_target(
-    target: str | Path, problem: str | Path | None = None, *, prime: WorkerPool | None = None
+    target: str | Path,
+    problem: str | Path | None = None,
+    *,
+    prime: WorkerPool | None = None,
+    before_parse: Callable[[], object] | None = None,
 ) -> Target:
     """Load a domain folder or a domain.pddl (then ``problem`` is required).
 
-    ``prime``: a planner worker pool that parses the task in parallel (see
-    :func:`~plan_bridge.domain.load_task`).
+    ``prime`` (a planner worker pool that parses the task in parallel) and
+    ``before_parse`` are those of :func:`~plan_bridge.domain.load_task`.
     """
     path = Path(target)
     if not path.exists():
@@ -130,12 +134,12 @@ def load_target(
             problem_path = problems[0]
         else:
             problem_path = _problem_path(Path(problem), path)
-        task = load_task(domain, problem_path, prime=prime)
+        task = load_task(domain, problem_path, prime=prime, before_parse=before_parse)
         return Target(path.name, domain, problem_path, task, path, _load_module(path))
     if problem is None:
         raise TargetError(f"{path}: a bare domain file needs --problem PROBLEM.pddl")
     problem_path = Path(problem)
-    task = load_task(path, problem_path, prime=prime)
+    task = load_task(path, problem_path, prime=prime, before_parse=before_parse)
     name = path.parent.name if path.stem == "domain" and path.parent.name else path.stem
     return Target(name, path, problem_path, task)
 

@@ -134,15 +134,10 @@ def _configure_run(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def _load(args: argparse.Namespace, *, to_plan: bool = False) -> Target:
+def _load(args: argparse.Namespace) -> Target:
     from plan_bridge.mission import load_target
 
-    if not to_plan:
-        return load_target(args.target, args.problem)
-    from plan_bridge.worker import default_pool
-
-    # A planner process parses the task while we do (see WorkerPool.prime).
-    return load_target(args.target, args.problem, prime=default_pool())
+    return load_target(args.target, args.problem)
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -224,7 +219,7 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
     from dataclasses import replace
 
     from plan_bridge.executive import Executive, ReplanPolicy
-    from plan_bridge.planning import get_planner
+    from plan_bridge.planning import Planner, get_planner
     from smach import SmachError
     from smach.introspection.journal import Journal
 
@@ -248,12 +243,23 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
         )
     except ValueError as exc:
         return fail(str(exc))
-    target = _load(args, to_plan=True)
+    from plan_bridge.mission import load_target
+    from plan_bridge.worker import default_pool
+
+    planners: list[Planner] = []
+    # A planner process parses the task while we parse it (prime); the planner name
+    # is checked before our parse, so a wrong one is reported without waiting for it.
+    target = load_target(
+        args.target,
+        args.problem,
+        prime=default_pool(),
+        before_parse=lambda: planners.append(get_planner(args.planner)),
+    )
+    planner = planners[0]
     symbolic = target.module is None or not hasattr(target.module, "setup")
     fail_rate = (
         args.fail_rate if args.fail_rate is not None else (0.0 if symbolic else DEFAULT_FAIL_RATE)
     )
-    planner = get_planner(args.planner)
     robot = None
     if args.ros:
         from plan_bridge.mission import MissionSetup

@@ -159,6 +159,10 @@ class Worker:
         self._ready.set()
         self._replies.put(None)
 
+    def is_ready(self) -> bool:
+        """Whether the worker has started (imported unified-planning) and serves."""
+        return self._ready.is_set() and self.is_alive()
+
     def wait_ready(self, timeout: float = STARTUP_TIMEOUT_S) -> None:
         if not self._ready.wait(timeout) or not self.is_alive():
             detail = self.stderr_tail()
@@ -464,7 +468,12 @@ class WorkerPool:
         if os.getpid() != self._pid:
             return  # inherited through fork: the workers belong to the parent
         for worker in idle:
-            worker.close()
+            if worker.is_ready():
+                worker.close()
+            else:
+                # Still importing unified-planning (it reads no input before that):
+                # waiting for it to see the closed input would delay our exit.
+                worker.kill()
 
 
 _pool: WorkerPool | None = None

@@ -15,7 +15,7 @@ from plan_bridge.domain import (
     parse_fact,
     task_from_problem,
 )
-from plan_bridge.errors import FactError, PddlError, UnsupportedFeatureError
+from plan_bridge.errors import FactError, PddlError, PlannerNotFoundError, UnsupportedFeatureError
 
 
 def test_every_parseable_bench_problem_loads(bench_problem: tuple[Path, Path]) -> None:
@@ -264,3 +264,24 @@ def test_pddl_errors_survive_pickling(bench: Path) -> None:
         load_task(bench / "storage" / "domain.pddl", bench / "storage" / "p01.pddl")
     copy = pickle.loads(pickle.dumps(caught.value))
     assert str(copy) == str(caught.value) and copy.feature == "either-types"
+
+
+def test_before_parse_runs_after_the_cheap_checks_and_its_error_stops_the_load(
+    tmp_path: Path, bench: Path
+) -> None:
+    calls: list[str] = []
+    domain, problem = bench / "gripper" / "domain.pddl", bench / "gripper" / "prob01.pddl"
+    load_task(domain, problem, before_parse=lambda: calls.append("checked"))
+    assert calls == ["checked"]
+
+    truncated = tmp_path / "domain.pddl"
+    truncated.write_text("(define (domain d)")
+    with pytest.raises(PddlError, match="unbalanced"):
+        load_task(truncated, problem, before_parse=lambda: calls.append("checked"))
+    assert calls == ["checked"]
+
+    def refuse() -> None:
+        raise PlannerNotFoundError("nope", ["fast-downward"])
+
+    with pytest.raises(PlannerNotFoundError, match="nope"):
+        load_task(domain, problem, before_parse=refuse)
