@@ -128,17 +128,22 @@ def test_planned_mission_runs_on_a_remote_skill_server(node: Any, planner: Any) 
 def test_remote_faults_trigger_replanning_until_the_goal_is_reached(
     node: Any, planner: Any
 ) -> None:
-    server = SkillServerProcess("--action-time", "0.05", "--fail-rate", "0.3", "--seed", "3")
+    server = SkillServerProcess(
+        "--action-time", "0.05", "--fail-rate", "0.3", "--seed", "3", "--prefix", "faulty"
+    )
     try:
         task = rooms()
         ex = Executive(
-            task, ros_skills(node, task), planner, policy=ReplanPolicy.named("replan-only")
+            task,
+            ros_skills(node, task, prefix="faulty"),
+            planner,
+            policy=ReplanPolicy.named("replan-only"),
         )
         assert ex.execute() == "succeeded"
         assert ex.report.actions_failed >= 1
         assert ex.report.replans >= 1
         assert {d["decision"] for d in ex.report.decisions} == {"replan"}
-        assert "(item-at cup office)" in remote_facts(node)
+        assert "(item-at cup office)" in remote_facts(node, prefix="faulty")
         assert server.wait_for_line("failed")
     finally:
         server.stop()
@@ -146,10 +151,10 @@ def test_remote_faults_trigger_replanning_until_the_goal_is_reached(
 
 @pytest.mark.timeout(90)
 def test_preempting_the_mission_cancels_the_remote_goal(node: Any, planner: Any) -> None:
-    server = SkillServerProcess("--action-time", "5.0")
+    server = SkillServerProcess("--action-time", "5.0", "--prefix", "slow")
     try:
         task = rooms()
-        ex = Executive(task, ros_skills(node, task), planner)
+        ex = Executive(task, ros_skills(node, task, prefix="slow"), planner)
         box: dict[str, Any] = {}
         thread = threading.Thread(target=lambda: box.update(outcome=ex.execute()))
         thread.start()
@@ -162,19 +167,22 @@ def test_preempting_the_mission_cancels_the_remote_goal(node: Any, planner: Any)
         assert time.monotonic() - asked < 2.0
         assert server.wait_for_line("canceled (move robot1 hall kitchen)", 5)
         # The world did not change: the cancelled move had no effect.
-        assert "(at robot1 hall)" in remote_facts(node)
+        assert "(at robot1 hall)" in remote_facts(node, prefix="slow")
     finally:
         server.stop()
 
 
 @pytest.mark.timeout(90)
 def test_service_transport_runs_the_mission_too(node: Any, planner: Any) -> None:
-    server = SkillServerProcess("--action-time", "0.05")
+    # Every test has its own prefix: no endpoint of another test's server can answer.
+    server = SkillServerProcess("--action-time", "0.05", "--prefix", "by_service")
     try:
         task = rooms()
-        ex = Executive(task, ros_skills(node, task, transport="service"), planner)
+        ex = Executive(
+            task, ros_skills(node, task, prefix="by_service", transport="service"), planner
+        )
         assert ex.execute() == "succeeded"
-        assert "(item-at cup office)" in remote_facts(node)
+        assert "(item-at cup office)" in remote_facts(node, prefix="by_service")
     finally:
         server.stop()
 
