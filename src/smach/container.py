@@ -25,6 +25,7 @@ import contextlib
 import functools
 import sys
 import threading
+import time
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from typing import Any, ClassVar, Concatenate, Generic, ParamSpec, TypeVar
 
@@ -54,6 +55,9 @@ from smach.state import State
 from smach.user_data import Remapper, UserData, make_remapper
 
 __all__ = ["Container", "construction_method"]
+
+_monotonic = time.monotonic
+_current_thread = threading.current_thread
 
 C = TypeVar("C", bound="Container")
 P = ParamSpec("P")
@@ -382,55 +386,126 @@ class Container(State):
         for listener in self._local:
             listener(event)
 
-    # Event builders, called only when _observed() is true.
-    def _emit_started(self, initial_states: Sequence[str]) -> None:
-        t, thread = stamp()
-        self._emit(
-            ContainerStarted(
-                path=self._path,
-                time=t,
-                thread=thread,
-                container_type=type(self).__name__,
-                initial_states=tuple(initial_states),
-            )
-        )
+    def _deliver(self, event: Event) -> None:
+        """Send an event the capture listeners already got to everybody else."""
+        if self._bus.event_listeners:
+            self._bus.deliver(event)
+        for listener in self._local:
+            listener(event)
 
-    def _emit_entered(self, label: str) -> None:
-        t, thread = stamp()
-        self._emit(StateEntered(path=f"{self._path}/{label}", time=t, thread=thread, label=label))
-
-    def _emit_exited(self, label: str, outcome: str | None) -> None:
-        t, thread = stamp()
-        self._emit(
-            StateExited(
-                path=f"{self._path}/{label}", time=t, thread=thread, label=label, outcome=outcome
+    # Event builders, called only when _observed() is true. Capture listeners (journal,
+    # viewer) get a tuple; an Event object is built only when somebody else listens.
+    # ``thread`` may be passed by a caller that already knows it (a run's own thread).
+    def _emit_started(self, initial_states: Sequence[str], thread: str | None = None) -> None:
+        t = _monotonic()
+        if thread is None:
+            thread = _current_thread().name
+        states = tuple(initial_states)
+        kind = type(self).__name__
+        bus = self._bus
+        if bus.sinks:
+            capture = (ContainerStarted, self._path, t, thread, kind, states)
+            for sink in bus.sinks:
+                try:
+                    sink(capture)
+                except Exception as exc:
+                    bus.sink_failed(sink, exc)
+        if bus.event_listeners or self._local:
+            self._deliver(
+                ContainerStarted(
+                    path=self._path,
+                    time=t,
+                    thread=thread,
+                    container_type=kind,
+                    initial_states=states,
+                )
             )
-        )
 
-    def _emit_transition(self, source: str, outcome: str, target: str) -> None:
-        t, thread = stamp()
-        self._emit(
-            Transition(
-                path=self._path,
-                time=t,
-                thread=thread,
-                source=source,
-                outcome=outcome,
-                target=target,
-            )
-        )
+    def _emit_entered(self, label: str, thread: str | None = None) -> None:
+        t = _monotonic()
+        if thread is None:
+            thread = _current_thread().name
+        path = f"{self._path}/{label}"
+        bus = self._bus
+        if bus.sinks:
+            capture = (StateEntered, path, t, thread, label)
+            for sink in bus.sinks:
+                try:
+                    sink(capture)
+                except Exception as exc:
+                    bus.sink_failed(sink, exc)
+        if bus.event_listeners or self._local:
+            self._deliver(StateEntered(path=path, time=t, thread=thread, label=label))
 
-    def _emit_terminated(self, terminal_states: Sequence[str], outcome: str | None) -> None:
-        t, thread = stamp()
-        self._emit(
-            ContainerTerminated(
-                path=self._path,
-                time=t,
-                thread=thread,
-                terminal_states=tuple(terminal_states),
-                outcome=outcome,
+    def _emit_exited(self, label: str, outcome: str | None, thread: str | None = None) -> None:
+        t = _monotonic()
+        if thread is None:
+            thread = _current_thread().name
+        path = f"{self._path}/{label}"
+        bus = self._bus
+        if bus.sinks:
+            capture = (StateExited, path, t, thread, label, outcome)
+            for sink in bus.sinks:
+                try:
+                    sink(capture)
+                except Exception as exc:
+                    bus.sink_failed(sink, exc)
+        if bus.event_listeners or self._local:
+            self._deliver(
+                StateExited(path=path, time=t, thread=thread, label=label, outcome=outcome)
             )
-        )
+
+    def _emit_transition(
+        self, source: str, outcome: str, target: str, thread: str | None = None
+    ) -> None:
+        t = _monotonic()
+        if thread is None:
+            thread = _current_thread().name
+        bus = self._bus
+        if bus.sinks:
+            capture = (Transition, self._path, t, thread, source, outcome, target)
+            for sink in bus.sinks:
+                try:
+                    sink(capture)
+                except Exception as exc:
+                    bus.sink_failed(sink, exc)
+        if bus.event_listeners or self._local:
+            self._deliver(
+                Transition(
+                    path=self._path,
+                    time=t,
+                    thread=thread,
+                    source=source,
+                    outcome=outcome,
+                    target=target,
+                )
+            )
+
+    def _emit_terminated(
+        self, terminal_states: Sequence[str], outcome: str | None, thread: str | None = None
+    ) -> None:
+        t = _monotonic()
+        if thread is None:
+            thread = _current_thread().name
+        states = tuple(terminal_states)
+        bus = self._bus
+        if bus.sinks:
+            capture = (ContainerTerminated, self._path, t, thread, states, outcome)
+            for sink in bus.sinks:
+                try:
+                    sink(capture)
+                except Exception as exc:
+                    bus.sink_failed(sink, exc)
+        if bus.event_listeners or self._local:
+            self._deliver(
+                ContainerTerminated(
+                    path=self._path,
+                    time=t,
+                    thread=thread,
+                    terminal_states=states,
+                    outcome=outcome,
+                )
+            )
 
     def _emit_error(self, exc: BaseException) -> None:
         if self._bus.listeners:

@@ -13,6 +13,7 @@ current slot, so at least one of them forwards the request to the running child.
 from __future__ import annotations
 
 import threading
+import time
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
@@ -24,6 +25,13 @@ from smach.exceptions import (
     InvalidTransitionError,
     InvalidUserCodeError,
 )
+from smach.introspection.events import (
+    Capture,
+    EventBus,
+    StateEntered,
+    StateExited,
+    Transition,
+)
 from smach.state import State
 from smach.user_data import Remapper, UserData
 from smach.util import is_shutdown as _never
@@ -31,17 +39,23 @@ from smach.util import key_list
 
 __all__ = ["StateMachine"]
 
+_monotonic = time.monotonic
+_current_thread = threading.current_thread
+
 
 class _Slot:
     """A compiled child: everything one step of the loop needs."""
 
-    __slots__ = ("constants", "label", "next", "remapper", "state")
+    __slots__ = ("constants", "label", "next", "path", "remapper", "state")
 
-    def __init__(self, label: str, state: State, remapper: Remapper, constants: dict[str, Any]):
+    def __init__(
+        self, label: str, state: State, remapper: Remapper, constants: dict[str, Any], path: str
+    ):
         self.label = label
         self.state = state
         self.remapper = remapper
         self.constants = constants
+        self.path = path  # the child's path in events (slots are recompiled on adoption)
         self.next: dict[str, _Slot | str] = {}
 
 
@@ -227,6 +241,7 @@ class StateMachine(Container):
                 state,
                 self._remapper(label, state, self._remappings[label]),
                 self._constants[label],
+                f"{self._path}/{label}",
             )
             for label, state in self._states.items()
         }
@@ -252,26 +267,60 @@ class StateMachine(Container):
             raise InvalidStateError(f"{self._path} is already running (in another thread?)")
         self._is_running = True
         label = ""
+        # With capture listeners only, the state_exited + transition of a step are held
+        # until the next state is entered (nothing else happens in between in this
+        # thread) and the three go out in one call; anything else releases them first.
+        held: Capture | None = None  # the state_exited; held_move: the transition
+        held_move: Capture = ()
         try:
             self._begin(parent_ud)
             self._preempted_state = None
             assert self._initial_state_label is not None
             slot = slots[self._initial_state_label]
             bus = self._bus
+            # The name of the thread running this machine, read once per run (when
+            # somebody listens): every event of this loop is emitted from it.
+            thread: str | None = None
             if bus.listeners or self._local:
-                self._emit_started([slot.label])
+                thread = threading.current_thread().name
+                self._emit_started([slot.label], thread)
             if smach.is_shutdown is not _never and smach.is_shutdown():
                 return None
             while True:
                 label = slot.label
                 self._current_slot = slot  # publish before reading the flag (see module doc)
                 if self._preempt_requested:
+                    if held is not None:
+                        self._release((held, held_move))
+                        held = None
                     self._handle_preempt(slot.state)
                 if slot.constants:
                     self._userdata._data.update(slot.constants)
                 observed = bus.listeners or self._local
                 if observed:
-                    self._emit_entered(label)
+                    if thread is None:
+                        thread = threading.current_thread().name
+                    if bus.event_listeners or self._local:
+                        if held is not None:
+                            self._release((held, held_move))
+                            held = None
+                        self._emit_entered(label, thread)
+                    else:  # capture listeners only (journal, viewer): _emit_entered inlined
+                        capture = (StateEntered, slot.path, _monotonic(), thread, label)
+                        if held is None:
+                            for sink in bus.sinks:
+                                try:
+                                    sink(capture)
+                                except Exception as exc:
+                                    bus.sink_failed(sink, exc)
+                        else:
+                            step = (held, held_move, capture)
+                            held = None
+                            for batch_sink in bus.batch_sinks:
+                                try:
+                                    batch_sink(step)
+                                except Exception as exc:
+                                    bus.sink_failed(batch_sink, exc)
                 try:
                     # Typed str: anything else fails the lookup below and is reported.
                     outcome: str = slot.state.execute(slot.remapper)  # type: ignore[assignment]
@@ -283,18 +332,34 @@ class StateMachine(Container):
                     if outcome is None and smach.is_shutdown():
                         return None
                     raise self._missing_transition(slot, outcome) from None
-                if observed:
-                    self._emit_exited(label, outcome)
                 if isinstance(target, _Slot):
                     if observed:
-                        # Callbacks read get_active_states(): show the new state.
-                        self._current_slot = target
-                        self._emit_transition(label, outcome, target.label)
+                        if bus.event_listeners or self._local:
+                            self._emit_step(slot, outcome, target, thread)
+                        else:  # capture listeners only: _emit_step inlined, held
+                            t = _monotonic()
+                            held = (StateExited, slot.path, t, thread, label, outcome)
+                            held_move = (
+                                Transition,
+                                self._path,
+                                t,
+                                thread,
+                                label,
+                                outcome,
+                                target.label,
+                            )
                     # The default check never says yes; skip the call unless replaced.
                     if smach.is_shutdown is not _never and smach.is_shutdown():
+                        if held is not None:
+                            self._release((held, held_move))
                         return None
                     slot = target
                     continue
+                if held is not None:  # listeners came or went during the run
+                    self._release((held, held_move))
+                    held = None
+                if observed:
+                    self._emit_exited(label, outcome, thread)
                 break
             final = target
             self._last_outcome = outcome
@@ -302,11 +367,13 @@ class StateMachine(Container):
                 self.service_preempt()
             self._current_slot = None
             if bus.listeners or self._local:
-                self._emit_terminated([label], final)
+                self._emit_terminated([label], final, thread)
             if parent_ud is not None and self._output_keys:
                 self._copy_output_keys(parent_ud)
             return final
         except Exception as exc:
+            if held is not None:
+                self._release((held, held_move))
             self._emit_error(exc)
             raise
         finally:
@@ -314,6 +381,56 @@ class StateMachine(Container):
             self._is_running = False
             if self._bus.preempt_seen:
                 self._after_run()
+
+    def _release(self, held: tuple[Capture, Capture]) -> None:
+        """Send a held state_exited + transition pair to the capture listeners."""
+        bus = self._bus
+        for sink in bus.batch_sinks:
+            try:
+                sink(held)
+            except Exception as exc:
+                bus.sink_failed(sink, exc)
+
+    def _emit_step(self, slot: _Slot, outcome: str, target: _Slot, thread: str | None) -> None:
+        """``state_exited`` of ``slot`` then the ``transition`` to ``target`` (one time)."""
+        t = _monotonic()
+        if thread is None:
+            thread = _current_thread().name
+        label = slot.label
+        path = self._path
+        bus = self._bus
+        if bus.batch_sinks:
+            pair = (
+                (StateExited, slot.path, t, thread, label, outcome),
+                (Transition, path, t, thread, label, outcome, target.label),
+            )
+            for sink in bus.batch_sinks:
+                try:
+                    sink(pair)
+                except Exception as exc:
+                    bus.sink_failed(sink, exc)
+        if bus.event_listeners or self._local:
+            self._deliver(
+                StateExited(path=slot.path, time=t, thread=thread, label=label, outcome=outcome)
+            )
+            # Callbacks read get_active_states(): show the new state.
+            self._current_slot = target
+            self._deliver(
+                Transition(
+                    path=path,
+                    time=t,
+                    thread=thread,
+                    source=label,
+                    outcome=outcome,
+                    target=target.label,
+                )
+            )
+        else:
+            self._current_slot = target
+
+    def _adopt(self, bus: EventBus, path: str) -> None:
+        super()._adopt(bus, path)
+        self._slots = None  # they hold the children's paths
 
     def _missing_transition(self, slot: _Slot, outcome: object) -> InvalidUserCodeError:
         if outcome in slot.state.get_registered_outcomes():

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 from smach.exceptions import InvalidUserCodeError, UndeclaredKeyError, UserDataKeyError
 from smach.introspection.events import UserdataWritten, stamp
+from smach.introspection.summary import frozen
 
 if TYPE_CHECKING:
     from smach.state import State
@@ -253,16 +254,23 @@ class Remapper(UserData):
         owner = self._owner
         assert owner is not None
         t, thread = stamp()
-        owner._bus.emit(
-            UserdataWritten(
-                path=owner._path,
-                time=t,
-                thread=thread,
-                key=target,
-                value=value,
-                writer=self._writer,
+        bus = owner._bus
+        if bus.sinks:
+            # Captures hold values that cannot change: a mutable one as it is now.
+            bus.capture(
+                (UserdataWritten, owner._path, t, thread, target, frozen(value), self._writer)
             )
-        )
+        if bus.event_listeners:
+            bus.deliver(
+                UserdataWritten(
+                    path=owner._path,
+                    time=t,
+                    thread=thread,
+                    key=target,
+                    value=value,
+                    writer=self._writer,
+                )
+            )
 
     def __getattr__(self, name: str) -> Any:
         if name.startswith("__"):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import threading
 
 import pytest
@@ -9,6 +10,7 @@ from smach_helpers import Fn, Leaf, LogRecorder, join, start_thread
 
 import smach
 from smach.introspection import events as ev
+from smach.introspection.summary import Summary
 
 
 def simple_sm() -> smach.StateMachine:
@@ -521,3 +523,209 @@ def test_thread_event_loop_helper_is_not_needed() -> None:
     before = threading.active_count()
     simple_sm()
     assert threading.active_count() == before
+
+
+# -- capture listeners (journal, viewer) --------------------------------------------------------------
+
+
+def nested_sm() -> smach.StateMachine:
+    sub = smach.StateMachine(["done"], output_keys=["n"])
+    with sub:
+        smach.StateMachine.add(
+            "X", Fn(lambda s, ud: setattr(ud, "n", 3) or "done", output_keys=["n"])
+        )
+    sm = smach.StateMachine(["done"])
+    with sm:
+        smach.StateMachine.add("A", Leaf(["go"]), {"go": "SUB"})
+        smach.StateMachine.add("SUB", sub, {"done": "B"})
+        smach.StateMachine.add("B", Leaf(["done"]))
+    return sm
+
+
+def test_capture_listener_gets_the_same_stream_as_tuples() -> None:
+    sm = nested_sm()
+    events: list[ev.Event] = []
+    captures: list[ev.Capture] = []
+    sm.add_listener(events.append)
+    sm.add_listener(ev.CaptureListener(captures.append, captures.extend))
+    sm.execute()
+    assert all(type(c) is tuple and c[0] is type(e) for c, e in zip(captures, events, strict=True))
+    assert [ev.event_of(c) for c in captures] == events
+    assert [e.capture() for e in events] == captures
+
+
+def test_capture_listener_alone_gets_every_event_one_by_one_by_default() -> None:
+    # Only capture listeners: the state machine builds no Event object at all.
+    captures: list[ev.Capture] = []
+    watched = nested_sm()
+    watched.add_listener(ev.CaptureListener(captures.append))  # no capture_many: each
+    watched.execute()
+    events: list[ev.Event] = []
+    twin = nested_sm()
+    twin.add_listener(events.append)
+    twin.execute()
+    assert [(c[0], c[1]) for c in captures] == [(type(e), e.path) for e in events]
+    assert [c[4:] for c in captures] == [e.capture()[4:] for e in events]
+
+
+def test_state_exited_and_the_following_transition_share_one_time() -> None:
+    sm = simple_sm()
+    events: list[ev.Event] = []
+    sm.add_listener(events.append)
+    sm.execute()
+    exited = next(e for e in events if isinstance(e, ev.StateExited))
+    transition = next(e for e in events if isinstance(e, ev.Transition))
+    assert exited.time == transition.time
+
+
+def test_captures_hold_a_summary_of_a_value_that_can_change() -> None:
+    def write(s: Fn, ud: object) -> str:
+        items = [1, 2]
+        ud.items = items  # type: ignore[attr-defined]
+        items.append(3)
+        return "done"
+
+    sm = smach.StateMachine(["done"])
+    sm.add("W", Fn(write, output_keys=["items"]))
+    events: list[ev.Event] = []
+    captures: list[ev.Capture] = []
+    sm.add_listener(events.append)
+    sm.add_listener(ev.CaptureListener(captures.append))
+    sm.execute()
+    (event,) = [e for e in events if isinstance(e, ev.UserdataWritten)]
+    (capture,) = [c for c in captures if c[0] is ev.UserdataWritten]
+    assert event.value == [1, 2, 3]  # ordinary listeners get the live object
+    assert capture[5] == Summary([1, 2])  # captures: as it was written
+
+
+def test_a_raising_capture_listener_is_detached_and_reported(logs: LogRecorder) -> None:
+    sm = simple_sm()
+    calls: list[ev.Capture] = []
+
+    def bad(capture: ev.Capture) -> None:
+        calls.append(capture)
+        raise RuntimeError("capture bug")
+
+    listener = ev.CaptureListener(bad)
+    sm.add_listener(listener)
+    assert sm.execute() == "done"
+    assert len(calls) == 1
+    assert listener not in sm._bus.listeners
+    assert any("capture bug" in m for m in logs.error)
+    assert sm.execute() == "done"
+    assert len(calls) == 1
+
+
+def test_events_follow_a_renamed_root_after_a_run() -> None:
+    sm = simple_sm()
+    captures: list[ev.Capture] = []
+    events: list[ev.Event] = []
+    sm.add_listener(ev.CaptureListener(captures.append, captures.extend))
+    sm.add_listener(events.append)
+    sm.execute()
+    sm.set_root_path("/SM")
+    captures.clear()
+    events.clear()
+    sm.execute()
+    assert {c[1] for c in captures} == {"/SM", "/SM/A", "/SM/B"}
+    assert {e.path for e in events} == {"/SM", "/SM/A", "/SM/B"}
+
+
+def _preempted_in_b() -> smach.StateMachine:
+    def b(s: Fn, ud: object) -> str:
+        s.service_preempt()
+        return "done"
+
+    sm = smach.StateMachine(["done"])
+    with sm:
+        smach.StateMachine.add(
+            "A", Fn(lambda s, ud: (sm.request_preempt(), "go")[1], ["go"]), {"go": "B"}
+        )
+        smach.StateMachine.add("B", Fn(b))
+    return sm
+
+
+def _raising_in_b() -> smach.StateMachine:
+    def b(s: Fn, ud: object) -> str:
+        raise ValueError("bad")
+
+    sm = smach.StateMachine(["done"])
+    with sm:
+        smach.StateMachine.add("A", Leaf(["go"]), {"go": "B"})
+        smach.StateMachine.add("B", Fn(b))
+    return sm
+
+
+def _shutdown_after_a() -> smach.StateMachine:
+    flag = {"down": False}
+
+    def a(s: Fn, ud: object) -> str:
+        flag["down"] = True
+        return "go"
+
+    smach.set_shutdown_check(lambda: flag["down"])
+    sm = smach.StateMachine(["done"])
+    with sm:
+        smach.StateMachine.add("A", Fn(a, ["go"]), {"go": "B"})
+        smach.StateMachine.add("B", Leaf())
+    return sm
+
+
+def _shutdown_check_raises_after_a() -> smach.StateMachine:
+    flag = {"broken": False}
+
+    def a(s: Fn, ud: object) -> str:
+        flag["broken"] = True
+        return "go"
+
+    def check() -> bool:
+        if flag["broken"]:
+            raise RuntimeError("shutdown check broke")
+        return False
+
+    smach.set_shutdown_check(check)
+    sm = smach.StateMachine(["done"])
+    with sm:
+        smach.StateMachine.add("A", Fn(a, ["go"]), {"go": "B"})
+        smach.StateMachine.add("B", Leaf())
+    return sm
+
+
+def _listener_joins_in_a() -> smach.StateMachine:
+    sm = smach.StateMachine(["done"])
+    late: list[ev.Event] = []
+    with sm:
+        smach.StateMachine.add(
+            "A", Fn(lambda s, ud: (sm.add_listener(late.append), "go")[1], ["go"]), {"go": "B"}
+        )
+        smach.StateMachine.add("B", Leaf(["go"]), {"go": "C"})
+        smach.StateMachine.add("C", Leaf())
+    return sm
+
+
+@pytest.mark.parametrize(
+    "build",
+    [
+        _preempted_in_b,
+        _raising_in_b,
+        _shutdown_after_a,
+        _shutdown_check_raises_after_a,
+        _listener_joins_in_a,
+    ],
+)
+def test_capture_listeners_see_what_ordinary_listeners_see_in_the_same_order(
+    build: object,
+) -> None:
+    # Capture listeners alone get a step's events together when the next state starts;
+    # preemption, errors, shutdown and listeners joining must not reorder or lose any.
+    def run(listener: object) -> None:
+        sm = build()  # type: ignore[operator]
+        sm.add_listener(listener)
+        with contextlib.suppress(smach.InvalidUserCodeError, RuntimeError):
+            sm.execute()
+
+    captures: list[ev.Capture] = []
+    run(ev.CaptureListener(captures.append, captures.extend))
+    events: list[ev.Event] = []
+    run(events.append)
+    assert [(c[0].kind, c[1]) for c in captures] == [(e.kind, e.path) for e in events]

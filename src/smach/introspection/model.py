@@ -71,12 +71,14 @@ class ViewModel:
         self.index += 1
         kind = record.get("kind")
         t = record.get("time")
-        if isinstance(t, int | float):
+        if type(t) is float or isinstance(t, int | float):
             if self.t0 is None:
                 self.t0 = float(t)
             self.time = float(t)
-        path = str(record.get("path", ""))
-        handler = _HANDLERS.get(str(kind))
+        path = record.get("path", "")
+        if type(path) is not str:
+            path = str(path)
+        handler = _HANDLERS.get(kind if type(kind) is str else str(kind))
         if handler is not None:
             handler(self, path, record)
 
@@ -375,13 +377,16 @@ class History:
         return self.first + len(self.records)
 
     def add(self, record: dict[str, Any]) -> None:
-        self.model.apply(record)
-        if self.model.structure_version not in self.structures:
-            self.structures[self.model.structure_version] = self.model.structure
-        self.records.append(record)
-        if self.total % self.every == 0:
-            self._checkpoints.append((self.total, self.model.copy()))
-        if len(self.records) > self.limit:
+        model = self.model
+        model.apply(record)
+        if model.structure_version not in self.structures:
+            self.structures[model.structure_version] = model.structure
+        records = self.records
+        records.append(record)
+        total = self.first + len(records)
+        if total % self.every == 0:
+            self._checkpoints.append((total, model.copy()))
+        if len(records) > self.limit:
             self._trim()
 
     def _trim(self) -> None:

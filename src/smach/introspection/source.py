@@ -8,25 +8,34 @@ one through the ROS 2 IntrospectionServer topics, say), write a class with these
 members that turns its messages into records, and pass it to
 :func:`smach.introspection.serve`.
 
-:class:`LiveSource` watches a tree in this process. Its listener is the bound
-``append`` of a bounded deque: the executing threads pay one C call per event and
-never wait for the viewer. Everything else (summarising values, building JSON,
-noticing structure changes) happens in the viewer's thread. When the viewer falls
-behind the deque drops the oldest events; the next poll then reads the active states
-from the live tree (a ``resync`` record) so the picture is right again.
+:class:`LiveSource` watches a tree in this process. Its listener is a
+:class:`~smach.introspection.events.CaptureListener` whose functions are the bound
+``append`` and ``extend`` of a bounded deque: the executing threads pay one C call
+per event (no event object is built for it) and never wait for the viewer.
+Everything else (building records and JSON, noticing structure changes) happens in
+the viewer's thread; a userdata value that could change is summarised into the
+capture when it is written, so the viewer shows it as written. When the viewer
+falls behind the deque
+drops the oldest events; the next poll then reads the active states from the live
+tree (a ``resync`` record) so the picture is right again. The pump also folds at
+most ``max_rate`` events a second on average (``burst`` at once after a quiet
+spell): a machine that produces more has the older events of each poll skipped and
+resynced the same way, so what a viewer costs a fast machine is bounded, whatever
+its event rate, while a short run is shown event by event.
 """
 
 from __future__ import annotations
 
 import collections
+import itertools
 import json
 import os
 import time
 from pathlib import Path
 from typing import Any, Protocol, runtime_checkable
 
-from smach.introspection.events import Event
-from smach.introspection.journal import event_record, summarise
+from smach.introspection.events import Capture, CaptureListener
+from smach.introspection.journal import capture_record, summarise
 from smach.introspection.structure import snapshot
 from smach.state import State
 
@@ -76,6 +85,8 @@ class LiveSource:
         root: State,
         *,
         buffer: int = 4096,
+        max_rate: float = 1000.0,
+        burst: int = 256,
         userdata_every: float = 1.0,
         title: str | None = None,
     ) -> None:
@@ -89,8 +100,12 @@ class LiveSource:
         self.root = root
         self.title = title or f"{type(root).__name__} {root.path or '/ROOT'}"
         self.userdata_every = userdata_every
-        self._pending: collections.deque[Event] = collections.deque(maxlen=buffer)
-        self._listener = self._pending.append
+        self.max_rate = max_rate
+        self.burst = burst
+        self._allowance = float(burst)
+        self._last_poll = time.monotonic()
+        self._pending: collections.deque[Capture] = collections.deque(maxlen=buffer)
+        self._listener = CaptureListener(self._pending.append, self._pending.extend)
         self._known: set[str] = set()
         self._last_userdata: dict[str, str] = {}
         self._next_userdata = 0.0
@@ -112,30 +127,46 @@ class LiveSource:
     def poll(self) -> list[dict[str, Any]]:
         pending = self._pending
         overflow = len(pending) >= (pending.maxlen or 0)
-        events: list[Event] = []
-        pop = pending.popleft
-        try:
-            while True:
-                events.append(pop())
-        except IndexError:
-            pass
+        # Take what is there (n x popleft, in C; appends may go on meanwhile).
+        count = len(pending)
+        captures: list[Capture] = list(
+            itertools.starmap(pending.popleft, itertools.repeat((), count))
+        )
         records: list[dict[str, Any]] = []
-        for event in events:
-            if event.path not in self._known:
-                records.append(self._structure_record(event.path))
+        now = time.monotonic()
+        allowance = min(self.burst, self._allowance + (now - self._last_poll) * self.max_rate)
+        self._last_poll = now
+        skip = count - int(allowance)
+        if skip > 0:
+            # Coalesce: a page shows a few hundred records per update; folding every
+            # event of a fast machine would cost the machine more than it shows. Keep
+            # the newest ones, then resync (which also notices a changed structure).
+            overflow = True
+            captures = captures[skip:]
+        self._allowance = max(0.0, allowance - len(captures))
+        known = self._known
+        for capture in captures:
+            path = capture[1]
+            if path not in known:
+                records.append(self._structure_record(path))
+                known = self._known
             try:
-                records.append(event_record(event))
+                records.append(capture_record(capture))
             except Exception as exc:  # a value whose summary fails must not stop the viewer
-                records.append({"kind": "error", "path": event.path, "time": event.time,
+                records.append({"kind": "error", "path": path, "time": capture[2],
                                 "error_type": "ViewerError", "message": repr(exc)})  # fmt: skip
         if overflow:
             self.dropped_batches += 1
+            active = self.active_paths()
+            unknown = next((path for path in active if path not in self._known), None)
+            if unknown is not None:  # the skipped events were about a changed tree
+                records.append(self._structure_record(unknown))
             records.append(
                 {
                     "kind": "resync",
                     "path": self.root.path or "/ROOT",
                     "time": time.monotonic(),
-                    "active": self.active_paths(),
+                    "active": active,
                     "reason": "the viewer fell behind and skipped events",
                 }
             )

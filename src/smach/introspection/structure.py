@@ -106,20 +106,22 @@ def snapshot(state: State, label: str | None = None) -> StateNode:
     """Take a snapshot of ``state`` and everything below it."""
     from smach.container import Container
 
+    return _snapshot(state, label, Container)
+
+
+def _snapshot(state: State, label: str | None, container: type[Any]) -> StateNode:
     path = state.path or "/" + (label or "ROOT")
     name = label or path.rsplit("/", 1)[-1] or "ROOT"
-    common: dict[str, Any] = {
-        "path": path,
-        "label": name,
-        "type": type(state).__name__,
-        "outcomes": state.get_registered_outcomes(),
-        "input_keys": state.get_registered_input_keys(),
-        "output_keys": state.get_registered_output_keys(),
-    }
-    if not isinstance(state, Container):
-        return StateNode(**common)
+    kind = type(state).__name__
+    outcomes = state.get_registered_outcomes()
+    input_keys = state.get_registered_input_keys()
+    output_keys = state.get_registered_output_keys()
+    if not isinstance(state, container):
+        return StateNode(path, name, kind, outcomes, input_keys, output_keys)
     children = state.get_children()
-    child_nodes = tuple(snapshot(child, child_label) for child_label, child in children.items())
+    child_nodes = tuple(
+        [_snapshot(child, child_label, container) for child_label, child in children.items()]
+    )
     edges: list[Edge] = []
     for outcome, source, target in state.get_internal_edges():
         if target is None or target == "":
@@ -129,7 +131,12 @@ def snapshot(state: State, label: str | None = None) -> StateNode:
         else:
             edges.append(Edge(source, outcome, target, True))
     return StateNode(
-        **common,
+        path,
+        name,
+        kind,
+        outcomes,
+        input_keys,
+        output_keys,
         is_container=True,
         children=child_nodes,
         edges=tuple(edges),

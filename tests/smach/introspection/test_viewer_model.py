@@ -62,6 +62,7 @@ def test_fold_of_a_journal_tracks_active_states_outcomes_and_userdata(tmp_path: 
     runner = threading.Thread(target=sm.execute)
     runner.start()
     assert hold["pick"].started.wait(10)
+    journal.flush()  # the writer thread would get there within milliseconds
     header, records = read_journal(path)
     view = fold(header, records)
     assert list(view.active) == ["/ROOT", "/ROOT/FETCH", "/ROOT/FETCH/PICK"]
@@ -70,6 +71,7 @@ def test_fold_of_a_journal_tracks_active_states_outcomes_and_userdata(tmp_path: 
     assert view.writers["/ROOT/FETCH"]["n"] == "NAVIGATE"
     hold["pick"].release("picked")
     assert hold["arm"].started.wait(10) and hold["base"].started.wait(10)
+    journal.flush()
     header, records = read_journal(path)
     view = fold(header, records)
     assert {"/ROOT/PAR/ARM", "/ROOT/PAR/BASE"} <= set(view.active)

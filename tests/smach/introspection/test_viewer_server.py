@@ -171,14 +171,23 @@ def test_a_client_that_never_reads_does_not_slow_execution() -> None:
         for _ in range(10):
             assert sm.execute() == "finished"
         assert time.monotonic() - started < 20
-        assert viewer.history.total > 1000
+        # The pump went on folding (the newest events of each poll, then a resync):
+        # the view caught up with the end of the run although the client never read.
+        wait_until(
+            lambda: (
+                viewer.history.model.root_outcome == "finished" and not viewer.history.model.running
+            ),
+            what="the view of the finished run",
+        )
+        assert viewer.history.total >= 100
 
 
 def test_live_source_listener_is_a_bounded_deque_append() -> None:
     sm = chain_machine(300)
     source = LiveSource(sm, buffer=32)
-    assert source._listener == source._pending.append
+    assert source._listener.capture == source._pending.append
     assert source._listener in sm._bus.listeners
+    assert sm._bus.sinks == (source._pending.append,) and sm._bus.event_listeners == ()
     sm.execute()
     assert len(source._pending) == 32  # the oldest events were dropped, nobody waited
     records = source.poll()
@@ -188,6 +197,21 @@ def test_live_source_listener_is_a_bounded_deque_append() -> None:
     assert kinds.count("container_terminated") == 1
     source.close()
     assert source._listener not in sm._bus.listeners
+
+
+def test_live_source_folds_a_bounded_number_of_events_then_resyncs() -> None:
+    sm = chain_machine(300)
+    source = LiveSource(sm, max_rate=0.0, burst=10)  # a viewer that never catches up
+    sm.execute()
+    records = source.poll()
+    kinds = [r["kind"] for r in records]
+    assert kinds.count("resync") == 1
+    events = [r for r in records if r["kind"] not in ("resync", "userdata", "structure")]
+    assert len(events) == 10  # the newest ten: the end of the run
+    assert events[-1]["kind"] == "container_terminated"
+    sm.execute()
+    assert [r["kind"] for r in source.poll() if r["kind"] != "userdata"] == ["resync"]
+    source.close()
 
 
 @pytest.mark.timeout(30)
