@@ -19,7 +19,7 @@ transition), then with states that each do ``--work`` microseconds of busy work
 * ``journal``         ``Journal`` writing JSON lines (background writer, batched)
 * ``journal+viewer``  both
 
-A trial runs the chain ``--reps`` times back to back (so the journal's writer and
+A trial runs the chain several times back to back (so the journal's writer and
 the viewer's pump work while the machine runs, as in a long mission) and, for the
 journal, includes the final ``flush()``: the time is what the run costs until every
 line is on disk. Between trials every watcher is let to settle (untimed), so no
