@@ -32,8 +32,8 @@ BENCH = (ROOT / ".." / "shared" / "pddl-bench").resolve()
 
 
 def problems(quick: bool) -> list[tuple[Path, Path]]:
-    from plan_bridge.domain import load_task
     from plan_bridge.errors import PddlError
+    from plan_bridge.pddl.task import load_task
 
     pairs = []
     for folder in sorted(p for p in BENCH.iterdir() if p.is_dir()):
@@ -53,8 +53,8 @@ def problems(quick: bool) -> list[tuple[Path, Path]]:
 def run_once(
     domain: Path, problem: Path, seed: int, fail_rate: float, max_replans: int, planner: Any
 ) -> dict[str, Any]:
-    from plan_bridge.executive import Executive, ReplanPolicy
-    from plan_bridge.mission import load_target
+    from plan_bridge.execution.executive import Executive, ReplanPolicy
+    from plan_bridge.missions.mission import load_target
 
     target = load_target(domain, problem)
     setup = target.setup(seed=seed, fail_rate=fail_rate)
@@ -90,7 +90,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     seeds = args.seeds or (3 if args.quick else 10)
 
-    from plan_bridge.planning import get_planner
+    from plan_bridge.planning.planner import get_planner
 
     planner = get_planner("fast-downward")
     planner.warm_up()

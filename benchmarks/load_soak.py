@@ -28,10 +28,10 @@ import time
 from pathlib import Path
 from typing import Any
 
-from plan_bridge.domain import FactLike, PlanningTask, load_task_from_text
-from plan_bridge.executive import Executive
-from plan_bridge.planning import PlanResult, PlanStatus, PlanStep
-from plan_bridge.simulation import SimulatedWorld, symbolic_skills
+from plan_bridge.execution.executive import Executive
+from plan_bridge.execution.simulation import SimulatedWorld, symbolic_skills
+from plan_bridge.pddl.task import FactLike, PlanningTask, load_task_from_text
+from plan_bridge.planning.planner import PlanResult, PlanStatus, PlanStep
 from smach.introspection.journal import Journal
 
 

@@ -95,8 +95,8 @@ def in_temp_dir() -> Iterator[Path]:
 
 def bench_problems(quick: bool) -> tuple[list[tuple[Path, Path]], list[str]]:
     """Parseable (domain, problem) pairs and the names of the ones UP cannot parse."""
-    from plan_bridge.domain import load_task
     from plan_bridge.errors import PddlError
+    from plan_bridge.pddl.task import load_task
 
     pairs, skipped = [], []
     for folder in sorted(p for p in BENCH.iterdir() if p.is_dir()):
@@ -139,9 +139,9 @@ def direct_solve(domain: Path, problem: Path) -> dict[str, float]:
 
 def ours_run(domain: Path, problem: Path, trial: int, planner: Any) -> dict[str, float]:
     """What ``plan-bridge run DOMAIN --problem PROBLEM --fail-rate 0`` does, in process."""
-    from plan_bridge.events import PlanComputed
-    from plan_bridge.executive import Executive, ReplanPolicy
-    from plan_bridge.mission import load_target
+    from plan_bridge.execution.events import PlanComputed
+    from plan_bridge.execution.executive import Executive, ReplanPolicy
+    from plan_bridge.missions.mission import load_target
 
     with tempfile.TemporaryDirectory(prefix="plan-bridge-bench-") as folder:
         copy = Path(folder) / problem.name
@@ -174,7 +174,7 @@ def ours_run(domain: Path, problem: Path, trial: int, planner: Any) -> dict[str,
 
 def engine_time_of(planner: Any, domain: Path, problem: Path, trial: int) -> float:
     """The engine's own time inside our worker for a fresh parse of ``problem``."""
-    from plan_bridge.domain import load_task_from_text
+    from plan_bridge.pddl.task import load_task_from_text
 
     task = load_task_from_text(
         domain.read_text(), problem.read_text() + f"\n; engine trial {trial}\n"
@@ -262,7 +262,7 @@ def chain_problem(nodes: int, tag: str = "") -> str:
 
 
 def chain_task(nodes: int, tag: str = "") -> Any:
-    from plan_bridge.domain import load_task_from_text
+    from plan_bridge.pddl.task import load_task_from_text
 
     return load_task_from_text(CHAIN_DOMAIN, chain_problem(nodes, tag))
 
@@ -272,11 +272,11 @@ def chain_task(nodes: int, tag: str = "") -> Any:
 
 def thousand_section(trials: int) -> dict[str, Any]:
     import smach
-    from plan_bridge.compile import compile_plan
-    from plan_bridge.planning import PlanStep
-    from plan_bridge.semantics import ActionModel
-    from plan_bridge.skills import SkillRegistry
-    from plan_bridge.world import WorldState
+    from plan_bridge.execution.compile import compile_plan
+    from plan_bridge.execution.semantics import ActionModel
+    from plan_bridge.execution.world import WorldState
+    from plan_bridge.planning.planner import PlanStep
+    from plan_bridge.skills.registry import SkillRegistry
 
     class NoOp(smach.State):
         def __init__(self, *args: str) -> None:
@@ -318,10 +318,10 @@ def thousand_section(trials: int) -> dict[str, Any]:
 
 def replan_once(task: Any, planner: Any) -> dict[str, Any]:
     """Run ``task`` with one failure in the middle; time the replan and save the state."""
-    from plan_bridge.events import ExecutiveDecision, PlanComputed, StepFinished
-    from plan_bridge.executive import Executive, ReplanPolicy
-    from plan_bridge.planning import PlanStep
-    from plan_bridge.simulation import SimulatedWorld, symbolic_skills
+    from plan_bridge.execution.events import ExecutiveDecision, PlanComputed, StepFinished
+    from plan_bridge.execution.executive import Executive, ReplanPolicy
+    from plan_bridge.execution.simulation import SimulatedWorld, symbolic_skills
+    from plan_bridge.planning.planner import PlanStep
 
     world = SimulatedWorld(task)
     skills = symbolic_skills(world)
@@ -364,8 +364,8 @@ def replan_once(task: Any, planner: Any) -> dict[str, Any]:
 
 def cold_replan(task: Any, belief: Any) -> float:
     """A fresh planner (new worker process: start, parse, solve) for the same state."""
-    from plan_bridge.planning import UPPlanner
-    from plan_bridge.worker import WorkerPool
+    from plan_bridge.planning.planner import UPPlanner
+    from plan_bridge.planning.worker import WorkerPool
 
     started = time.perf_counter()
     pool = WorkerPool(max_workers=1)
@@ -393,7 +393,7 @@ def warm_reparse(task: Any, belief: Any, planner: Any) -> float:
 
 
 def replan_section(pairs: list[tuple[Path, Path]], trials: int, planner: Any) -> dict[str, Any]:
-    from plan_bridge.domain import load_task
+    from plan_bridge.pddl.task import load_task
 
     table = []
     for domain, problem in pairs:
@@ -522,12 +522,12 @@ def startup_section(runs: int) -> dict[str, Any]:
 
 def scaling_section(sizes: list[int], planner: Any) -> dict[str, Any]:
     import smach
-    from plan_bridge.compile import compile_plan
-    from plan_bridge.events import PlanComputed
-    from plan_bridge.executive import Executive
-    from plan_bridge.semantics import ActionModel
-    from plan_bridge.simulation import SimulatedWorld, symbolic_skills
-    from plan_bridge.world import WorldState
+    from plan_bridge.execution.compile import compile_plan
+    from plan_bridge.execution.events import PlanComputed
+    from plan_bridge.execution.executive import Executive
+    from plan_bridge.execution.semantics import ActionModel
+    from plan_bridge.execution.simulation import SimulatedWorld, symbolic_skills
+    from plan_bridge.execution.world import WorldState
 
     rows = []
     for nodes in sizes:
@@ -568,7 +568,7 @@ def scaling_section(sizes: list[int], planner: Any) -> dict[str, Any]:
 
 
 def _steps(texts: tuple[str, ...]) -> list[Any]:
-    from plan_bridge.planning import PlanStep
+    from plan_bridge.planning.planner import PlanStep
 
     steps = []
     for text in texts:
@@ -737,8 +737,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     trials = args.trials or (1 if args.quick else 3)
 
-    from plan_bridge.planning import get_planner
-    from plan_bridge.up_runtime import ensure_unified_planning
+    from plan_bridge.pddl.up_runtime import ensure_unified_planning
+    from plan_bridge.planning.planner import get_planner
 
     started = time.perf_counter()
     ensure_unified_planning()
@@ -758,7 +758,7 @@ def main(argv: list[str] | None = None) -> int:
     results["skipped"] = skipped
     progress(f"{len(pairs)} parseable problems; not parsed by UP: {', '.join(skipped) or 'none'}")
     # Warm the worker (UP import, engine plug-ins) and this process's UP.
-    from plan_bridge.domain import load_task
+    from plan_bridge.pddl.task import load_task
 
     warm = load_task(BENCH / "gripper" / "domain.pddl", BENCH / "gripper" / "prob01.pddl")
     planner.solve(warm, timeout=60)

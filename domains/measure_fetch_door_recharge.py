@@ -21,9 +21,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from plan_bridge.executive import Executive
-from plan_bridge.mission import Target, load_target
-from plan_bridge.planning import Planner, get_planner
+from plan_bridge.execution.executive import Executive
+from plan_bridge.missions.mission import Target, load_target
+from plan_bridge.planning.planner import Planner, get_planner
 
 HERE = Path(__file__).resolve().parent
 MISSIONS = {"fetch_drink": "p01", "door_opening": "p02", "recharge": "p02"}

@@ -13,9 +13,9 @@ from __future__ import annotations
 import sys
 
 import smach
-from plan_bridge.domain import load_task_from_text
-from plan_bridge.executive import Executive
-from plan_bridge.skills import SkillRegistry
+from plan_bridge.execution.executive import Executive
+from plan_bridge.pddl.task import load_task_from_text
+from plan_bridge.skills.registry import SkillRegistry
 
 DOMAIN = """
 (define (domain deliver)

@@ -15,7 +15,7 @@ import random
 import sys
 from collections.abc import Sequence
 
-from plan_bridge.problem_writer import both_ways, generator_main, pddl_problem
+from plan_bridge.missions.problem_writer import both_ways, generator_main, pddl_problem
 
 
 def room(row: int, col: int) -> str:

@@ -23,8 +23,8 @@ attempts, ends the mission ``aborted``. The machine::
 from __future__ import annotations
 
 import smach
-from plan_bridge.domain import PlanningTask
-from plan_bridge.mission import ScriptedMission
+from plan_bridge.missions.mission import ScriptedMission
+from plan_bridge.pddl.task import PlanningTask
 
 from .skills import cross_behaviour, open_door_behaviour, pass_door_behaviour
 from .world import DoorWorld, Joint

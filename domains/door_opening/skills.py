@@ -15,10 +15,10 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import smach
-from plan_bridge.domain import PlanningTask
-from plan_bridge.mission import MissionSetup
-from plan_bridge.skill_kit import SKILL_OUTCOMES, Report, WorldCall, fact, observe, skill_machine
-from plan_bridge.skills import SkillRegistry
+from plan_bridge.missions.mission import MissionSetup
+from plan_bridge.pddl.task import PlanningTask
+from plan_bridge.skills.kit import SKILL_OUTCOMES, Report, WorldCall, fact, observe, skill_machine
+from plan_bridge.skills.registry import SkillRegistry
 
 from .world import DoorWorld
 

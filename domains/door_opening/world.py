@@ -19,9 +19,9 @@ success rates measure recovery. Simulated durations advance ``sim_time``.
 
 from __future__ import annotations
 
-from plan_bridge.domain import PlanningTask
-from plan_bridge.simulation import SimulatedWorld
-from plan_bridge.skill_kit import fewest_hops
+from plan_bridge.execution.simulation import SimulatedWorld
+from plan_bridge.pddl.task import PlanningTask
+from plan_bridge.skills.kit import fewest_hops
 
 __all__ = ["DoorWorld", "Joint"]
 

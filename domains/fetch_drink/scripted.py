@@ -27,8 +27,8 @@ import itertools
 from collections.abc import Sequence
 
 import smach
-from plan_bridge.domain import PlanningTask
-from plan_bridge.mission import ScriptedMission
+from plan_bridge.missions.mission import ScriptedMission
+from plan_bridge.pddl.task import PlanningTask
 
 from .skills import (
     DRIVE_ATTEMPTS,

@@ -12,10 +12,10 @@ missions use the same motor skills and differ only in who decides what to do nex
 from __future__ import annotations
 
 import smach
-from plan_bridge.domain import PlanningTask
-from plan_bridge.mission import MissionSetup
-from plan_bridge.skill_kit import Report, RobotState, fact, observe, skill_machine
-from plan_bridge.skills import SkillRegistry
+from plan_bridge.missions.mission import MissionSetup
+from plan_bridge.pddl.task import PlanningTask
+from plan_bridge.skills.kit import Report, RobotState, fact, observe, skill_machine
+from plan_bridge.skills.registry import SkillRegistry
 
 from .world import CONGESTION_WAIT, FetchDrinkWorld
 

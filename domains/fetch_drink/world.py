@@ -28,9 +28,9 @@ import zlib
 from collections import deque
 from collections.abc import Iterable
 
-from plan_bridge.domain import Fact, PlanningTask
-from plan_bridge.simulation import SimulatedWorld
-from plan_bridge.skill_kit import shortest_route
+from plan_bridge.execution.simulation import SimulatedWorld
+from plan_bridge.pddl.task import Fact, PlanningTask
+from plan_bridge.skills.kit import shortest_route
 
 __all__ = ["FetchDrinkWorld"]
 

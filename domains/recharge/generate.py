@@ -14,7 +14,7 @@ import random
 import sys
 from collections.abc import Sequence
 
-from plan_bridge.problem_writer import both_ways, generator_main, pddl_problem
+from plan_bridge.missions.problem_writer import both_ways, generator_main, pddl_problem
 
 
 def problem_text(*, rooms: int, items: int, chords: int, seed: int) -> str:

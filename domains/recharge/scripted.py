@@ -19,8 +19,8 @@ three times, a grasp that slips twice, a battery emptied on the way to the dock.
 from __future__ import annotations
 
 import smach
-from plan_bridge.domain import PlanningTask
-from plan_bridge.mission import ScriptedMission
+from plan_bridge.missions.mission import ScriptedMission
+from plan_bridge.pddl.task import PlanningTask
 
 from .skills import (
     PlanRoute,

@@ -26,10 +26,10 @@ import threading
 from collections.abc import Callable
 
 import smach
-from plan_bridge.domain import PlanningTask
-from plan_bridge.mission import MissionSetup
-from plan_bridge.skill_kit import WorldCall, fact, observe, skill_machine
-from plan_bridge.skills import SkillRegistry
+from plan_bridge.missions.mission import MissionSetup
+from plan_bridge.pddl.task import PlanningTask
+from plan_bridge.skills.kit import WorldCall, fact, observe, skill_machine
+from plan_bridge.skills.registry import SkillRegistry
 
 from .world import RechargeWorld
 

@@ -29,9 +29,9 @@ import zlib
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from plan_bridge.domain import PlanningTask
-from plan_bridge.simulation import SimulatedWorld
-from plan_bridge.skill_kit import shortest_route
+from plan_bridge.execution.simulation import SimulatedWorld
+from plan_bridge.pddl.task import PlanningTask
+from plan_bridge.skills.kit import shortest_route
 
 __all__ = ["LOW_THRESHOLD", "RechargeWorld"]
 

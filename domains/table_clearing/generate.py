@@ -12,7 +12,7 @@ import argparse
 import random
 from collections.abc import Sequence
 
-from plan_bridge.problem_writer import both_ways, generator_main, pddl_problem
+from plan_bridge.missions.problem_writer import both_ways, generator_main, pddl_problem
 
 ROBOT = "pr2"
 CART = "cart1"

@@ -21,9 +21,9 @@ from __future__ import annotations
 import itertools
 
 import smach
-from plan_bridge.domain import Fact, PlanningTask
-from plan_bridge.mission import ScriptedMission
-from plan_bridge.skill_kit import fewest_hops
+from plan_bridge.missions.mission import ScriptedMission
+from plan_bridge.pddl.task import Fact, PlanningTask
+from plan_bridge.skills.kit import fewest_hops
 
 from .skills import pick_machine, place_machine, push_machine
 from .world import TableWorld

@@ -27,10 +27,10 @@ from collections.abc import Mapping
 from typing import Any
 
 import smach
-from plan_bridge.domain import PlanningTask
-from plan_bridge.mission import MissionSetup
-from plan_bridge.skill_kit import RobotState, observe, skill_machine
-from plan_bridge.skills import SkillRegistry
+from plan_bridge.missions.mission import MissionSetup
+from plan_bridge.pddl.task import PlanningTask
+from plan_bridge.skills.kit import RobotState, observe, skill_machine
+from plan_bridge.skills.registry import SkillRegistry
 
 from .world import CartRun, TableWorld
 

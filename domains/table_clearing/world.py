@@ -24,8 +24,8 @@ from __future__ import annotations
 import threading
 from dataclasses import dataclass, field
 
-from plan_bridge.domain import PlanningTask
-from plan_bridge.simulation import SimulatedWorld
+from plan_bridge.execution.simulation import SimulatedWorld
+from plan_bridge.pddl.task import PlanningTask
 
 __all__ = ["CartRun", "TableWorld"]
 

@@ -17,9 +17,9 @@ falls off on the way.
 from __future__ import annotations
 
 import smach
-from plan_bridge.domain import PlanningTask
-from plan_bridge.mission import ScriptedMission
-from plan_bridge.skill_kit import fewest_hops
+from plan_bridge.missions.mission import ScriptedMission
+from plan_bridge.pddl.task import PlanningTask
+from plan_bridge.skills.kit import fewest_hops
 
 from .skills import drop_machine, move_machine, pick_machine
 from .world import DeliveryWorld

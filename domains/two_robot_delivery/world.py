@@ -27,8 +27,8 @@ from __future__ import annotations
 
 import random
 
-from plan_bridge.domain import PlanningTask
-from plan_bridge.simulation import Fault, SimulatedWorld
+from plan_bridge.execution.simulation import Fault, SimulatedWorld
+from plan_bridge.pddl.task import PlanningTask
 
 __all__ = ["DeliveryWorld"]
 

@@ -1,13 +1,20 @@
 """plan_bridge: PDDL planning with unified-planning engines, executed as SMACH machines.
 
-Foundation layer (this module re-exports it lazily, so ``import plan_bridge`` does
-not import unified-planning):
+The subpackages follow the pipeline, each building only on the ones before it:
 
-* :func:`load_task` / :func:`task_from_problem` -> :class:`PlanningTask`
-  (``plan_bridge.domain``),
-* :func:`get_planner` -> :class:`Planner` whose ``solve`` returns a
-  :class:`PlanResult` (``plan_bridge.planning``),
-* the exceptions in ``plan_bridge.errors``.
+1. :mod:`plan_bridge.pddl`: PDDL text -> checked :class:`PlanningTask`
+   (:func:`load_task`);
+2. :mod:`plan_bridge.planning`: planners under a hard time limit -> :class:`PlanResult`
+   (:func:`get_planner`);
+3. :mod:`plan_bridge.skills`: a SMACH skill per PDDL action (:class:`SkillRegistry`);
+4. :mod:`plan_bridge.execution`: plans compiled into SMACH and run by the
+   :class:`Executive` against a (simulated) world, with belief and replanning;
+5. :mod:`plan_bridge.missions`: domain folders as runnable targets (:func:`load_target`);
+6. :mod:`plan_bridge.cli` and :mod:`plan_bridge.study` on top; :mod:`plan_bridge.ros`
+   carries missions across processes.
+
+This module re-exports the public names lazily, so ``import plan_bridge`` does not
+import unified-planning.
 """
 
 from __future__ import annotations
@@ -25,7 +32,12 @@ from plan_bridge.errors import (
 )
 
 if TYPE_CHECKING:
-    from plan_bridge.domain import (
+    from plan_bridge.execution.compile import compile_plan
+    from plan_bridge.execution.executive import Executive, ReplanPolicy
+    from plan_bridge.execution.simulation import SimulatedWorld
+    from plan_bridge.execution.world import WorldState
+    from plan_bridge.missions.mission import MissionSetup, Target, load_target
+    from plan_bridge.pddl.task import (
         ActionSchema,
         Fact,
         PlanningTask,
@@ -35,7 +47,7 @@ if TYPE_CHECKING:
         parse_fact,
         task_from_problem,
     )
-    from plan_bridge.planning import (
+    from plan_bridge.planning.planner import (
         Planner,
         PlanResult,
         PlanStatus,
@@ -44,31 +56,44 @@ if TYPE_CHECKING:
         get_planner,
         installed_planners,
     )
+    from plan_bridge.skills.registry import Skill, SkillRegistry
 
 __version__ = "0.1.0"
 
 _LAZY = {
-    "ActionSchema": "plan_bridge.domain",
-    "Fact": "plan_bridge.domain",
-    "PlanningTask": "plan_bridge.domain",
-    "format_fact": "plan_bridge.domain",
-    "load_task": "plan_bridge.domain",
-    "load_task_from_text": "plan_bridge.domain",
-    "parse_fact": "plan_bridge.domain",
-    "task_from_problem": "plan_bridge.domain",
-    "PlanResult": "plan_bridge.planning",
-    "PlanStatus": "plan_bridge.planning",
-    "PlanStep": "plan_bridge.planning",
-    "Planner": "plan_bridge.planning",
-    "UPPlanner": "plan_bridge.planning",
-    "get_planner": "plan_bridge.planning",
-    "installed_planners": "plan_bridge.planning",
+    "ActionSchema": "plan_bridge.pddl.task",
+    "Fact": "plan_bridge.pddl.task",
+    "PlanningTask": "plan_bridge.pddl.task",
+    "format_fact": "plan_bridge.pddl.task",
+    "load_task": "plan_bridge.pddl.task",
+    "load_task_from_text": "plan_bridge.pddl.task",
+    "parse_fact": "plan_bridge.pddl.task",
+    "task_from_problem": "plan_bridge.pddl.task",
+    "PlanResult": "plan_bridge.planning.planner",
+    "PlanStatus": "plan_bridge.planning.planner",
+    "PlanStep": "plan_bridge.planning.planner",
+    "Planner": "plan_bridge.planning.planner",
+    "UPPlanner": "plan_bridge.planning.planner",
+    "get_planner": "plan_bridge.planning.planner",
+    "installed_planners": "plan_bridge.planning.planner",
+    "Skill": "plan_bridge.skills.registry",
+    "SkillRegistry": "plan_bridge.skills.registry",
+    "WorldState": "plan_bridge.execution.world",
+    "compile_plan": "plan_bridge.execution.compile",
+    "Executive": "plan_bridge.execution.executive",
+    "ReplanPolicy": "plan_bridge.execution.executive",
+    "SimulatedWorld": "plan_bridge.execution.simulation",
+    "MissionSetup": "plan_bridge.missions.mission",
+    "Target": "plan_bridge.missions.mission",
+    "load_target": "plan_bridge.missions.mission",
 }
 
 __all__ = [
     "ActionSchema",
+    "Executive",
     "Fact",
     "FactError",
+    "MissionSetup",
     "PddlError",
     "PlanBridgeError",
     "PlanResult",
@@ -77,12 +102,20 @@ __all__ = [
     "Planner",
     "PlannerNotFoundError",
     "PlanningTask",
+    "ReplanPolicy",
+    "SimulatedWorld",
+    "Skill",
+    "SkillRegistry",
+    "Target",
     "UPPlanner",
     "UnsupportedFeatureError",
     "WorkerError",
+    "WorldState",
+    "compile_plan",
     "format_fact",
     "get_planner",
     "installed_planners",
+    "load_target",
     "load_task",
     "load_task_from_text",
     "parse_fact",

@@ -1,7 +1,7 @@
 """Exceptions raised by plan_bridge.
 
 Expected planning outcomes (no plan, timeout, unsupported problem) are *results*
-(:class:`plan_bridge.planning.PlanResult`), not exceptions. Exceptions are for bad
+(:class:`plan_bridge.planning.planner.PlanResult`), not exceptions. Exceptions are for bad
 input (a PDDL file that cannot be read, an unknown planner name, a fact that names
 an unknown object) and broken infrastructure (the planner worker cannot start).
 

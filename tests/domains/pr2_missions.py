@@ -20,10 +20,10 @@ from functools import cache
 from pathlib import Path
 from typing import Any
 
-from plan_bridge.domain import Fact, FactLike, PlanningTask, parse_fact
-from plan_bridge.executive import Executive
-from plan_bridge.mission import MissionSetup, Target, load_target
-from plan_bridge.planning import Planner, PlanResult, PlanStatus, get_planner
+from plan_bridge.execution.executive import Executive
+from plan_bridge.missions.mission import MissionSetup, Target, load_target
+from plan_bridge.pddl.task import Fact, FactLike, PlanningTask, parse_fact
+from plan_bridge.planning.planner import Planner, PlanResult, PlanStatus, get_planner
 from smach.testing import EventRecorder
 
 REPO = Path(__file__).resolve().parents[2]

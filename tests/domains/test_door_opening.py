@@ -9,8 +9,8 @@ from __future__ import annotations
 import pytest
 from pr2_missions import SEEDS, planner, target
 
-from plan_bridge.executive import Executive
-from plan_bridge.planning import PlanStep
+from plan_bridge.execution.executive import Executive
+from plan_bridge.planning.planner import PlanStep
 
 NAME = "door_opening"
 

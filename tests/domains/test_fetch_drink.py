@@ -9,7 +9,7 @@ from __future__ import annotations
 import pytest
 from pr2_missions import planner, setup_with_fault, target
 
-from plan_bridge.executive import Executive
+from plan_bridge.execution.executive import Executive
 
 NAME = "fetch_drink"
 

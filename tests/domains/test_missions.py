@@ -26,9 +26,9 @@ from pr2_missions import (
     target,
 )
 
-from plan_bridge.domain import load_task_from_text
-from plan_bridge.executive import Executive
-from plan_bridge.semantics import ActionModel
+from plan_bridge.execution.executive import Executive
+from plan_bridge.execution.semantics import ActionModel
+from plan_bridge.pddl.task import load_task_from_text
 
 PROBLEMS = ("p01", "p02", "p03")
 

@@ -9,9 +9,9 @@ from __future__ import annotations
 import pytest
 from pr2_missions import BY_NAME, RATES, planner, setup_with_fault, sweep, target
 
-from plan_bridge.executive import Executive
-from plan_bridge.planning import PlanStep
-from plan_bridge.world import normalise_observations
+from plan_bridge.execution.executive import Executive
+from plan_bridge.execution.world import normalise_observations
+from plan_bridge.planning.planner import PlanStep
 
 NAME = "recharge"
 

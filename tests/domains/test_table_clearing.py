@@ -11,9 +11,9 @@ from typing import Any
 import pytest
 from pr2_missions import planner, run_planned, run_scripted, sweep, target
 
-from plan_bridge.events import StepFinished
-from plan_bridge.executive import Executive
-from plan_bridge.mission import Target
+from plan_bridge.execution.events import StepFinished
+from plan_bridge.execution.executive import Executive
+from plan_bridge.missions.mission import Target
 from smach.testing import EventRecorder
 
 NAME = "table_clearing"

@@ -9,8 +9,8 @@ from __future__ import annotations
 import pytest
 from pr2_missions import planner, run_planned, target
 
-from plan_bridge.events import StepFinished
-from plan_bridge.executive import Executive
+from plan_bridge.execution.events import StepFinished
+from plan_bridge.execution.executive import Executive
 from smach.testing import EventRecorder
 
 NAME = "two_robot_delivery"

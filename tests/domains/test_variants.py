@@ -6,8 +6,8 @@ from pathlib import Path
 
 import pytest
 
-from plan_bridge.executive import Executive
-from plan_bridge.mission import load_target
+from plan_bridge.execution.executive import Executive
+from plan_bridge.missions.mission import load_target
 
 DOMAINS = Path(__file__).resolve().parents[2] / "domains"
 

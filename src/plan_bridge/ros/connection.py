@@ -22,10 +22,10 @@ from typing import Any, TextIO
 
 import smach
 from plan_bridge.errors import PlanBridgeError
-from plan_bridge.planning import PlanStep
+from plan_bridge.planning.planner import PlanStep
 from plan_bridge.ros.protocol import task_digest
 from plan_bridge.ros.skills import remote_info, ros_skills
-from plan_bridge.skills import SkillRegistry
+from plan_bridge.skills.registry import SkillRegistry
 
 __all__ = ["RobotConnection", "RobotError", "RobotLost"]
 
@@ -53,7 +53,7 @@ class RobotConnection:
     """A rclpy node of the executive and the robot node it drives.
 
     ``start_robot``: start ``python -m plan_bridge.ros.skill_server`` for
-    ``target`` (a :class:`~plan_bridge.mission.Target`) with ``seed``,
+    ``target`` (a :class:`~plan_bridge.missions.mission.Target`) with ``seed``,
     ``fail_rate`` and ``time_scale``, and stop it in :meth:`close`. Otherwise
     connect to the robot node already serving under ``prefix``. ``log`` receives
     what happens (and the robot's own lines, prefixed ``[robot]``).

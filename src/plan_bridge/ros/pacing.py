@@ -1,7 +1,7 @@
 """Wall-clock pacing of a simulated world, so that a robot node's skills take time.
 
 A domain's simulated world (``domains/NAME/world.py``) counts the seconds its robot
-spends in :attr:`~plan_bridge.simulation.SimulatedWorld.sim_time` and never sleeps:
+spends in :attr:`~plan_bridge.execution.simulation.SimulatedWorld.sim_time` and never sleeps:
 a whole mission runs in milliseconds. A robot node serving the domain's skills over
 ROS 2 should behave like a robot instead: a skill takes time, streams progress, and a
 cancel stops the motion in progress. :func:`pace` does that without touching the

@@ -39,7 +39,7 @@ import re
 from collections.abc import Iterable
 from typing import Any
 
-from plan_bridge.domain import Fact, PlanningTask, format_fact, parse_fact
+from plan_bridge.pddl.task import Fact, PlanningTask, format_fact, parse_fact
 
 __all__ = [
     "FACTS_SERVICE",

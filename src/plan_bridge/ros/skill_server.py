@@ -5,8 +5,8 @@ Run it as a process (the executive runs elsewhere, on this host or another)::
     python -m plan_bridge.ros.skill_server domains/fetch_drink --problem p01 --seed 1 --fail-rate 0.1
     python -m plan_bridge.ros.skill_server DOMAIN.pddl PROBLEM.pddl --seed 1 --fail-rate 0.2
 
-**A domain folder** with Python (``setup()``, see :mod:`plan_bridge.mission`): the
-robot builds the domain's :class:`~plan_bridge.mission.MissionSetup` (its real
+**A domain folder** with Python (``setup()``, see :mod:`plan_bridge.missions.mission`): the
+robot builds the domain's :class:`~plan_bridge.missions.mission.MissionSetup` (its real
 simulated world, ``world.py``, with its faults) and, for each goal, executes the
 domain's own hand-written skill state machine for that action against that world,
 here, in the robot process. Feedback counts the skill's states as they are entered;
@@ -16,7 +16,7 @@ in wall time (``--time-scale`` wall seconds per simulated second,
 motion in progress (which then has no effect).
 
 **A bare domain.pddl, or a folder without Python:** every action is performed
-symbolically in a :class:`~plan_bridge.simulation.SimulatedWorld` after
+symbolically in a :class:`~plan_bridge.execution.simulation.SimulatedWorld` after
 ``--action-time`` seconds of wall time (feedback every tenth of it, cancellable
 throughout), failing with probability ``--fail-rate`` (seeded).
 
@@ -42,9 +42,11 @@ from pathlib import Path
 from typing import Any
 
 import smach
-from plan_bridge.domain import PlanningTask, parse_fact
 from plan_bridge.errors import FactError, PlanBridgeError
-from plan_bridge.planning import PlanStep
+from plan_bridge.execution.simulation import SimulatedWorld
+from plan_bridge.execution.world import normalise_observations
+from plan_bridge.pddl.task import PlanningTask, parse_fact
+from plan_bridge.planning.planner import PlanStep
 from plan_bridge.ros.pacing import Pacer, Run, pace
 from plan_bridge.ros.protocol import (
     FACTS_SERVICE,
@@ -57,9 +59,7 @@ from plan_bridge.ros.protocol import (
     interfaces,
     task_digest,
 )
-from plan_bridge.simulation import SimulatedWorld
-from plan_bridge.skills import SkillError, SkillRegistry
-from plan_bridge.world import normalise_observations
+from plan_bridge.skills.registry import SkillError, SkillRegistry
 from smach.introspection.events import Event, StateEntered
 from smach.ros._api import (
     ActionServer,
@@ -507,7 +507,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.time_scale < 0:
         parser.error(f"--time-scale must be >= 0, got {args.time_scale}")
 
-    from plan_bridge.mission import load_target
+    from plan_bridge.missions.mission import load_target
 
     try:
         target = load_target(args.target, args.problem or args.problem_file)

@@ -6,8 +6,8 @@ import json
 from typing import Any
 
 import smach
-from plan_bridge.domain import PlanningTask
-from plan_bridge.planning import PlanStep
+from plan_bridge.pddl.task import PlanningTask
+from plan_bridge.planning.planner import PlanStep
 from plan_bridge.ros.protocol import (
     FACTS_SERVICE,
     INFO_SERVICE,
@@ -18,7 +18,7 @@ from plan_bridge.ros.protocol import (
     decode_result,
     interfaces,
 )
-from plan_bridge.skills import SkillRegistry
+from plan_bridge.skills.registry import SkillRegistry
 from smach.ros import ServiceState, SimpleActionState
 from smach.ros._api import GoalStatus
 

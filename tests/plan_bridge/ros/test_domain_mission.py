@@ -23,10 +23,10 @@ import pytest
 
 pytest.importorskip("smach.ros", reason="needs rclpy (the ros extra)")
 
-from plan_bridge.events import StepFinished
-from plan_bridge.executive import Executive
-from plan_bridge.mission import Target, load_target
-from plan_bridge.planning import get_planner
+from plan_bridge.execution.events import StepFinished
+from plan_bridge.execution.executive import Executive
+from plan_bridge.missions.mission import Target, load_target
+from plan_bridge.planning.planner import get_planner
 from plan_bridge.ros import remote_facts
 from plan_bridge.ros.connection import RobotConnection, RobotError
 

@@ -16,9 +16,9 @@ import pytest
 
 pytest.importorskip("smach.ros", reason="needs rclpy (the ros extra)")
 
-from plan_bridge.domain import PlanningTask, load_task
-from plan_bridge.executive import Executive, ReplanPolicy
-from plan_bridge.planning import PlanStep, get_planner
+from plan_bridge.execution.executive import Executive, ReplanPolicy
+from plan_bridge.pddl.task import PlanningTask, load_task
+from plan_bridge.planning.planner import PlanStep, get_planner
 from plan_bridge.ros import decode_result, encode_result, remote_facts, ros_skill, ros_skills
 from plan_bridge.ros.protocol import action_topic
 from smach.ros._api import rclpy

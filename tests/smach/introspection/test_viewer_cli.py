@@ -95,7 +95,7 @@ def test_view_serves_the_journal_on_loopback(journal: Path) -> None:
 def test_plan_bridge_view_export_and_export_commands(
     journal: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from plan_bridge import cli, view_command  # noqa: F401  (registers view/export)
+    from plan_bridge import cli
 
     assert cli.main(["view", str(journal), "--export", "mermaid", "--event", "5"]) == 0
     assert capsys.readouterr().out.startswith("stateDiagram-v2")

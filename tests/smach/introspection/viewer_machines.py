@@ -141,7 +141,7 @@ class PickFailsOnce:
 
     @staticmethod
     def world(task: Any) -> Any:
-        from plan_bridge.simulation import SimulatedWorld
+        from plan_bridge.execution.simulation import SimulatedWorld
 
         class World(SimulatedWorld):
             failed = False
@@ -160,9 +160,9 @@ class PickFailsOnce:
 
 def planned_mission() -> Any:
     """An Executive over the rooms domain with symbolic skills and one failing pick."""
-    from plan_bridge.domain import load_task
-    from plan_bridge.executive import Executive, ReplanPolicy
-    from plan_bridge.simulation import symbolic_skills
+    from plan_bridge.execution.executive import Executive, ReplanPolicy
+    from plan_bridge.execution.simulation import symbolic_skills
+    from plan_bridge.pddl.task import load_task
 
     task = load_task(ROOMS / "domain.pddl", ROOMS / "problems" / "p01.pddl")
     world = PickFailsOnce.world(task)

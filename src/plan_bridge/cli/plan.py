@@ -1,0 +1,101 @@
+"""The ``plan`` subcommand of ``plan-bridge``: plan DOMAIN + PROBLEM and print the plan."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from plan_bridge.cli.base import EXIT_FAILED, EXIT_OK, Command, fail, positive_seconds, progress
+
+# -- plan ------------------------------------------------------------------------
+
+
+def _configure_plan(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("domain", metavar="DOMAIN.pddl", help="PDDL domain file")
+    parser.add_argument("problem", metavar="PROBLEM.pddl", help="PDDL problem file")
+    parser.add_argument(
+        "--planner",
+        default="fast-downward",
+        metavar="NAME",
+        help="unified-planning engine: fast-downward (default), fast-downward-opt, "
+        "pyperplan, pyperplan-opt or any installed one-shot planner",
+    )
+    parser.add_argument(
+        "--timeout",
+        type=positive_seconds,
+        default=60.0,
+        metavar="S",
+        help="hard wall-clock limit for the planner in seconds (default 60)",
+    )
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+
+
+def _run_plan(args: argparse.Namespace) -> int:
+    from plan_bridge.errors import PlanBridgeError
+    from plan_bridge.pddl.source import check_source, read_source
+
+    try:
+        # Cheap checks first: bad input is reported before unified-planning loads.
+        for path, kind in ((args.domain, "domain"), (args.problem, "problem")):
+            check_source(read_source(path, kind))
+    except PlanBridgeError as exc:
+        return fail(str(exc))
+
+    from plan_bridge.pddl.task import load_task
+    from plan_bridge.planning.planner import PlanStatus, UPPlanner, get_planner
+    from plan_bridge.planning.worker import default_pool
+
+    planners: list[UPPlanner] = []
+    try:
+        progress(f"loading {args.domain} and {args.problem}...")
+        # A planner process parses the task while we parse it (prime); the planner
+        # name is checked before our parse, so a wrong one is reported at once.
+        task = load_task(
+            args.domain,
+            args.problem,
+            prime=default_pool(),
+            before_parse=lambda: planners.append(get_planner(args.planner)),
+        )
+    except PlanBridgeError as exc:
+        return fail(str(exc))
+    planner = planners[0]
+    progress(f"planning with {planner.name} (timeout {args.timeout:g} s)...")
+    try:
+        result = planner.solve(task, timeout=args.timeout)
+    except PlanBridgeError as exc:
+        return fail(str(exc), EXIT_FAILED)
+
+    if args.json:
+        payload = result.to_json()
+        payload["domain"] = str(args.domain)
+        payload["problem"] = str(args.problem)
+        print(json.dumps(payload, indent=None))
+    else:
+        for warning in result.warnings:
+            progress(f"warning: {warning}")
+        if result.solved:
+            width = len(str(len(result.actions)))
+            for number, step in enumerate(result.actions, start=1):
+                print(f"{number:>{width}}. {step}")
+            print(
+                f"solved: {len(result.actions)} actions in {result.planning_time_s:.2f} s "
+                f"with {result.planner}"
+            )
+        else:
+            print(
+                f"{result.status.value}: no plan after {result.planning_time_s:.2f} s with "
+                f"{result.planner}: {result.explanation}"
+            )
+    return EXIT_OK if result.status is PlanStatus.SOLVED else EXIT_FAILED
+
+
+COMMANDS = (
+    Command(
+        name="plan",
+        help="plan a PDDL problem and print the plan",
+        description="Plan DOMAIN.pddl + PROBLEM.pddl with a unified-planning engine under a "
+        "hard time limit and print the plan (exit 0), or why there is none (exit 1).",
+        configure=_configure_plan,
+        run=_run_plan,
+    ),
+)

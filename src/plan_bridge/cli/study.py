@@ -1,0 +1,123 @@
+"""The ``study`` subcommand of ``plan-bridge`` (the work is in :mod:`plan_bridge.study`)."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from pathlib import Path
+from typing import Any
+
+from plan_bridge.cli.base import EXIT_OK, Command, fail
+from plan_bridge.study.report import authoring_cost, write_report
+from plan_bridge.study.runs import APPROACHES, DEFAULT_APPROACHES, RunSpec, run_study
+
+
+def _float_list(text: str) -> list[float]:
+    try:
+        values = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected comma-separated numbers, got {text!r}"
+        ) from None
+    if not values or any(not 0 <= v <= 1 for v in values):
+        raise argparse.ArgumentTypeError(f"fault rates must be between 0 and 1: {text!r}")
+    return values
+
+
+def _configure(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "targets", nargs="+", metavar="TARGET", help="domain folders (domains/NAME)"
+    )
+    parser.add_argument("--runs", type=int, default=10, help="seeds per configuration (default 10)")
+    parser.add_argument("--seeds", help="explicit comma-separated seeds (overrides --runs)")
+    parser.add_argument("--fault-rates", type=_float_list, default=[0.0, 0.1, 0.2, 0.4])
+    parser.add_argument(
+        "--approaches",
+        default=",".join(DEFAULT_APPROACHES),
+        help=f"comma-separated: {', '.join(APPROACHES)}",
+    )
+    parser.add_argument(
+        "--problem", default="", help="problem name in each folder's problems/ (default: the first)"
+    )
+    parser.add_argument(
+        "--variant", default="", help="a world variant the domains support, e.g. 'unanticipated'"
+    )
+    parser.add_argument(
+        "--out", default="study-results", help="output folder (default study-results)"
+    )
+    parser.add_argument(
+        "--jobs", type=int, default=max(1, min(2, os.cpu_count() or 1)), help="worker processes"
+    )
+    parser.add_argument(
+        "--run-timeout", type=float, default=300.0, help="seconds before a stuck run is killed"
+    )
+
+
+def _run_command(args: argparse.Namespace) -> int:
+    from plan_bridge.errors import PlanBridgeError
+    from plan_bridge.missions.mission import load_target
+
+    approaches = [a.strip() for a in args.approaches.split(",") if a.strip()]
+    unknown = [a for a in approaches if a not in APPROACHES]
+    if unknown:
+        return fail(f"unknown approaches {unknown}; approaches: {', '.join(APPROACHES)}")
+    if args.runs < 1 or args.jobs < 1:
+        return fail("--runs and --jobs must be at least 1")
+    try:
+        seeds = [int(s) for s in args.seeds.split(",")] if args.seeds else list(range(args.runs))
+    except ValueError:
+        return fail(f"--seeds must be comma-separated integers, got {args.seeds!r}")
+    try:
+        for target in args.targets:
+            loaded = load_target(target, args.problem or None)
+            if "scripted" in approaches and not hasattr(loaded.module, "scripted"):
+                return fail(
+                    f"{target}: no scripted baseline (scripted() in the domain's Python); drop 'scripted' from --approaches"
+                )
+    except PlanBridgeError as exc:
+        return fail(str(exc))
+    specs = [
+        RunSpec(str(t), a, r, s, args.problem, args.variant)
+        for t in args.targets
+        for a in approaches
+        for r in args.fault_rates
+        for s in seeds
+    ]
+    out = Path(args.out)
+
+    def progress(done: int, total: int, spec: RunSpec, row: dict[str, Any], elapsed: float) -> None:
+        width = 24
+        filled = int(width * done / total)
+        eta = elapsed / done * (total - done)
+        print(
+            f"\r[{'#' * filled}{'.' * (width - filled)}] {done}/{total} "
+            f"{Path(spec.target).name} {spec.approach} p={spec.fault_rate:g} seed {spec.seed}: "
+            f"{row['outcome']} ETA {eta:4.0f} s   ",
+            end="" if done < total else "\n",
+            file=sys.stderr,
+            flush=True,
+        )
+
+    total_runs = len(specs)
+    print(
+        f"plan-bridge study: {total_runs} runs ({len(args.targets)} targets x {len(approaches)} approaches x {len(args.fault_rates)} fault rates x {len(seeds)} seeds), {args.jobs} workers, results in {out}/",
+        file=sys.stderr,
+        flush=True,
+    )
+    rows = run_study(specs, out, jobs=args.jobs, run_timeout=args.run_timeout, progress=progress)
+    authoring: list[dict[str, Any]] = []
+    for target in args.targets:
+        authoring += authoring_cost(str(target), args.problem)
+    command = "plan-bridge study " + " ".join(sys.argv[2:] if len(sys.argv) > 2 else args.targets)
+    report = write_report(rows, out, authoring, command)
+    errors = sum(1 for r in rows if r["outcome"] in ("error", "timeout", "crashed"))
+    print(f"{len(rows)} runs ({errors} errors); report: {report}", file=sys.stderr)
+    return EXIT_OK if errors == 0 else 1
+
+
+COMMANDS = (
+    Command(
+        "study", "compare scripted and planned missions under faults", _configure, _run_command
+    ),
+)

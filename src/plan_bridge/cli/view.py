@@ -1,0 +1,73 @@
+"""The ``view`` and ``export`` subcommands of ``plan-bridge``.
+
+``plan-bridge view RUN.jsonl [--port N]`` serves the smach viewer page over a
+journal written by ``plan-bridge run --journal RUN.jsonl`` (time slider, step
+forward/back, the plan panel with replans and decisions); with ``--export FORMAT``
+it writes DOT, Mermaid or SVG instead of serving. ``plan-bridge export`` is the
+same export as its own command. The work is done by :mod:`smach.introspection.cli`.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from plan_bridge.cli.base import Command
+
+__all__: list[str] = []
+
+
+def _configure_view(parser: argparse.ArgumentParser) -> None:
+    from smach.introspection.cli import add_moment, configure_view
+
+    configure_view(parser)
+    parser.add_argument(
+        "--export",
+        choices=("dot", "mermaid", "svg"),
+        metavar="FORMAT",
+        help="write the machine as dot, mermaid or svg instead of serving the page",
+    )
+    add_moment(parser)
+    parser.add_argument("-o", "--output", metavar="FILE", help="with --export: write to FILE")
+
+
+def _view(args: argparse.Namespace) -> int:
+    from smach.introspection.cli import run_export, run_view
+
+    if args.export:
+        args.format = args.export
+        return run_export(args, prog="plan-bridge")
+    if args.at is not None or args.event is not None or args.output:
+        from plan_bridge.cli.base import fail
+
+        return fail("--at, --event and --output go with --export")
+    return run_view(args, prog="plan-bridge")
+
+
+def _configure_export(parser: argparse.ArgumentParser) -> None:
+    from smach.introspection.cli import configure_export
+
+    configure_export(parser)
+
+
+def _export(args: argparse.Namespace) -> int:
+    from smach.introspection.cli import run_export
+
+    return run_export(args, prog="plan-bridge")
+
+
+COMMANDS = (
+    Command(
+        "view",
+        "replay a run's journal in the browser viewer (or export it with --export)",
+        _configure_view,
+        _view,
+        description="Serve the viewer page over RUN.jsonl (written by plan-bridge run --journal) "
+        "on 127.0.0.1, with a time slider, step forward/back and the plan panel.",
+    ),
+    Command(
+        "export",
+        "write DOT, Mermaid or SVG of a journal's machine at a given moment",
+        _configure_export,
+        _export,
+    ),
+)

@@ -1,0 +1,11 @@
+"""Stage 4, execution: plans compiled into SMACH and run against a world.
+
+* :mod:`~plan_bridge.execution.semantics`: grounded actions, preconditions and
+  effects, plan validation from a state;
+* :mod:`~plan_bridge.execution.world`: the believed world state;
+* :mod:`~plan_bridge.execution.compile`: a plan -> a SMACH machine of skills;
+* :mod:`~plan_bridge.execution.executive`: the :class:`Executive` loop (dispatch,
+  validate, repair, replan), itself a SMACH state;
+* :mod:`~plan_bridge.execution.simulation`: simulated worlds with faults;
+* :mod:`~plan_bridge.execution.events`: the executive's events.
+"""

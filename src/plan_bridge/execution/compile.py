@@ -1,0 +1,274 @@
+"""Compile a plan into a SMACH machine: one readable state per step.
+
+Each step becomes a :class:`StepState` (a one-child container around the skill)
+labelled ``03_PICK_CUP_TABLE``. Before running its skill it checks the action's
+preconditions against the belief; when the skill succeeds it applies the action's
+effects; it passes the skill's observations to the belief. Its outcomes are
+``succeeded``, ``aborted``, ``preempted`` and ``invalid`` (preconditions unmet).
+
+Sequential plans become a chain. With ``concurrent=True``, steps that do not
+interfere (no step adds or deletes an atom the other needs or changes) are grouped
+into layers, and each layer with several steps runs as a Concurrence: independent
+actions of several robots run at the same time.
+"""
+
+from __future__ import annotations
+
+import re
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+
+import smach
+from plan_bridge.execution.events import ObservationsApplied, StepFinished
+from plan_bridge.execution.semantics import ActionModel, GroundAction
+from plan_bridge.execution.world import WorldState, normalise_observations
+from plan_bridge.pddl.task import Fact, format_fact
+from plan_bridge.planning.planner import PlanStep
+from plan_bridge.skills.registry import (
+    OBSERVATIONS_KEY,
+    REQUIRED_OUTCOMES,
+    STEP_KEYS,
+    Skill,
+    SkillRegistry,
+)
+from smach.introspection.events import stamp
+
+__all__ = ["CompiledPlan", "StepRecord", "StepState", "compile_plan", "step_label"]
+
+STEP_OUTCOMES = (*REQUIRED_OUTCOMES, "invalid")
+
+
+@dataclass
+class StepRecord:
+    """What happened to one step in its last execution."""
+
+    index: int
+    step: PlanStep
+    outcome: str = ""
+    skill_outcome: str = ""
+    unmet: tuple[str, ...] = ()
+    observations_changed: tuple[str, ...] = ()
+    duration_s: float = 0.0
+
+
+def step_label(index: int, step: PlanStep, width: int = 2) -> str:
+    """``03_PICK_CUP_TABLE``: readable, unique within a plan, safe in state paths."""
+    words = [step.action, *step.arguments]
+    text = "_".join(re.sub(r"[^A-Za-z0-9]+", "-", w).strip("-").upper() for w in words)
+    return f"{index:0{width}d}_{text}"
+
+
+class StepState(smach.Wrapper):
+    """One plan step: precondition check, the skill, effects and observations."""
+
+    extra_outcomes = ()
+
+    def __init__(
+        self,
+        index: int,
+        ground: GroundAction,
+        belief: WorldState,
+        skill: Skill | None,
+        *,
+        check_preconditions: bool = True,
+        on_finished: Callable[[StepRecord], None] | None = None,
+    ) -> None:
+        super().__init__(outcomes=list(STEP_OUTCOMES), input_keys=[], output_keys=[])
+        self.index = index
+        self.ground = ground
+        self.belief = belief
+        self.skill = skill
+        self.check_preconditions = check_preconditions
+        self.on_finished = on_finished
+        self.record = StepRecord(index, ground.step)
+
+    def add(
+        self, label: str, state: smach.State, remapping: Mapping[str, str] | None = None
+    ) -> smach.State:
+        added = super().add(label, state, remapping)
+        remap = remapping or {}
+        # Step keys are provided here; observations are consumed here: neither crosses
+        # the step's boundary. Every other key the skill declares comes from the plan.
+        self.register_input_keys(
+            [remap.get(k, k) for k in state.get_registered_input_keys() if k not in STEP_KEYS]
+        )
+        self.register_output_keys(
+            [remap.get(k, k) for k in state.get_registered_output_keys() if k != OBSERVATIONS_KEY]
+        )
+        return added
+
+    def consistency_problems(self) -> list[str]:
+        if self._child is None:
+            return [f"{self._path}: the step has no skill"]
+        problems = []
+        for outcome in self._child.get_registered_outcomes():
+            mapped = self.skill.map_outcome(outcome) if self.skill else outcome
+            if mapped not in REQUIRED_OUTCOMES:
+                problems.append(
+                    f"{self._path}/{self._label}: skill outcome {outcome!r} is not one of "
+                    f"{', '.join(REQUIRED_OUTCOMES)} and is not mapped by the skill's outcome_map"
+                )
+        return problems
+
+    def run(self, child: smach.State, label: str) -> str:
+        record = StepRecord(self.index, self.ground.step)
+        self.record = record
+        started = time.monotonic()
+        with self.belief.locked() as facts:
+            if self.check_preconditions and not self.ground.applicable(facts):
+                record.outcome = "invalid"
+                record.unmet = tuple(self.ground.unmet_preconditions(facts))
+                return self._finish(record, started)
+            # Effects are those of the state the step starts in (conditional effects
+            # read it), applied only if the skill succeeds.
+            adds, dels = self.ground.effects(facts)
+        data = self._userdata._data
+        data["action"] = self.ground.name
+        data["arguments"] = self.ground.arguments
+        data["params"] = self.ground.binding
+        data.pop(OBSERVATIONS_KEY, None)
+        skill_outcome = self.run_child()
+        record.skill_outcome = skill_outcome
+        outcome = self.skill.map_outcome(skill_outcome) if self.skill else skill_outcome
+        try:
+            observations = normalise_observations(data.pop(OBSERVATIONS_KEY, None))
+        except ValueError as exc:
+            raise smach.InvalidUserCodeError(f"skill {self._path}/{label}: {exc}") from exc
+        if outcome == "succeeded":
+            self.belief.apply(adds, dels)
+        changed = self.belief.observe(observations)
+        record.observations_changed = tuple(
+            ("" if truth else "not ") + format_fact(fact) for fact, truth in changed
+        )
+        if changed and self._bus.listeners:
+            t, thread = stamp()
+            self._bus.emit(
+                ObservationsApplied(
+                    path=self._path, time=t, thread=thread, changed=record.observations_changed
+                )
+            )
+        record.outcome = outcome
+        return self._finish(record, started)
+
+    def _finish(self, record: StepRecord, started: float) -> str:
+        record.duration_s = time.monotonic() - started
+        if self._bus.listeners:
+            t, thread = stamp()
+            self._bus.emit(
+                StepFinished(
+                    path=self._path,
+                    time=t,
+                    thread=thread,
+                    index=record.index,
+                    action=str(record.step),
+                    outcome=record.outcome,
+                    skill_outcome=record.skill_outcome,
+                    duration_s=record.duration_s,
+                )
+            )
+        if self.on_finished is not None:
+            self.on_finished(record)
+        return record.outcome
+
+
+@dataclass
+class CompiledPlan:
+    """A plan as a SMACH machine, with its step states in plan order."""
+
+    machine: smach.StateMachine
+    steps: list[PlanStep]
+    labels: list[str]
+    step_states: list[StepState]
+    layers: list[list[int]] = field(default_factory=list)
+
+
+def compile_plan(
+    steps: Sequence[PlanStep],
+    skills: SkillRegistry,
+    model: ActionModel,
+    belief: WorldState,
+    *,
+    first_index: int = 1,
+    concurrent: bool = False,
+    check_preconditions: bool = True,
+    on_finished: Callable[[StepRecord], None] | None = None,
+) -> CompiledPlan:
+    """Build the SMACH machine that executes ``steps`` (numbered from ``first_index``)."""
+    steps = list(steps)
+    width = max(2, len(str(first_index + len(steps))))
+    labels = [step_label(first_index + i, s, width) for i, s in enumerate(steps)]
+    states: list[StepState] = []
+    for i, step in enumerate(steps):
+        ground = model.ground(step)
+        skill_state, skill = skills.create(step)
+        state = StepState(
+            first_index + i,
+            ground,
+            belief,
+            skill,
+            check_preconditions=check_preconditions,
+            on_finished=on_finished,
+        )
+        state.add("SKILL", skill_state)
+        states.append(state)
+    layers = _layers(steps, model) if concurrent else [[i] for i in range(len(steps))]
+    sm = smach.StateMachine(outcomes=list(STEP_OUTCOMES))
+    sm.register_input_keys({k for s in states for k in s.get_registered_input_keys()})
+    sm.register_output_keys({k for s in states for k in s.get_registered_output_keys()})
+    if not steps:
+        sm.add("00_GOAL_HOLDS", smach.CBState(lambda ud: "succeeded", outcomes=["succeeded"]))
+        return CompiledPlan(sm, [], [], [], [])
+    units: list[tuple[str, smach.State]] = []
+    for layer in layers:
+        if len(layer) == 1:
+            units.append((labels[layer[0]], states[layer[0]]))
+            continue
+        group = smach.Concurrence(
+            outcomes=list(STEP_OUTCOMES),
+            default_outcome="succeeded",
+            outcome_cb=_layer_outcome,
+            input_keys=sorted({k for i in layer for k in states[i].get_registered_input_keys()}),
+            output_keys=sorted({k for i in layer for k in states[i].get_registered_output_keys()}),
+        )
+        for i in layer:
+            group.add(labels[i], states[i])
+        units.append((f"{labels[layer[0]][:width]}_PARALLEL_{len(layer)}", group))
+    for n, (label, unit) in enumerate(units):
+        following = units[n + 1][0] if n + 1 < len(units) else "succeeded"
+        sm.add(label, unit, transitions={"succeeded": following})
+    return CompiledPlan(sm, steps, labels, states, layers)
+
+
+def _layer_outcome(outcomes: dict[str, str | None]) -> str:
+    values = set(outcomes.values())
+    for worst in ("invalid", "aborted", "preempted"):
+        if worst in values:
+            return worst
+    return "succeeded"
+
+
+def _layers(steps: Sequence[PlanStep], model: ActionModel) -> list[list[int]]:
+    """Group steps into layers of mutually independent steps, keeping causal order."""
+    reads: list[frozenset[Fact] | None] = []
+    writes: list[set[Fact]] = []
+    for step in steps:
+        ground = model.ground(step)
+        pre = ground.precondition_atoms()
+        adds, dels = ground.effects(frozenset())
+        effects_all = {e.atom(ground._binding) for e in ground._lifted.effects}
+        reads.append(pre)
+        writes.append(adds | dels | effects_all)
+    if any(r is None for r in reads):
+        return [[i] for i in range(len(steps))]
+    level = [0] * len(steps)
+    for j in range(len(steps)):
+        rj = reads[j] or frozenset()
+        for i in range(j):
+            ri = reads[i] or frozenset()
+            if writes[i] & rj or writes[j] & ri or writes[i] & writes[j]:
+                level[j] = max(level[j], level[i] + 1)
+    layers: dict[int, list[int]] = {}
+    for i, lvl in enumerate(level):
+        layers.setdefault(lvl, []).append(i)
+    return [layers[k] for k in sorted(layers)]

@@ -1,0 +1,184 @@
+"""Symbolic skills: run any PDDL domain against a simulated world, with faults.
+
+The simulated world holds the true facts. A symbolic skill applies its action's
+effects to it when the action succeeds, and fails (changing nothing) with probability
+``fail_rate``, drawn from a seeded random generator. Either way it reports what it
+sees of the facts its action touches, so the executive's belief follows the world.
+This makes any PDDL domain executable without writing skills.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import random
+import threading
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import smach
+from plan_bridge.execution.semantics import ActionModel
+from plan_bridge.pddl.task import Fact, PlanningTask
+from plan_bridge.planning.planner import PlanStep
+from plan_bridge.skills.registry import SkillRegistry
+
+__all__ = ["Fault", "SimulatedWorld", "SymbolicSkill", "symbolic_skills"]
+
+
+@dataclass(frozen=True)
+class Fault:
+    """A fault the simulated world injected: when (simulated seconds), what, where."""
+
+    time: float
+    kind: str
+    action: str
+    detail: str = ""
+
+
+class SimulatedWorld:
+    """The true state of a simulated world, with seeded faults.
+
+    Domain worlds subclass it: they keep the true PDDL facts in :attr:`_facts`
+    (under :attr:`_lock`), advance :attr:`sim_time` (simulated robot seconds) as the
+    robot acts, draw their faults with :meth:`chance` and record every fault they
+    inject with :meth:`inject`, so that runs can be compared (``plan-bridge study``).
+    """
+
+    #: Simulated seconds one symbolic action takes.
+    action_duration = 1.0
+    #: Probability of each kind of fault per unit of ``fail_rate`` (see :meth:`chance`).
+    fault_scale: ClassVar[Mapping[str, float]] = {}
+    #: The variants of the world a domain offers (``plan-bridge study --variant``), such as
+    #: a fault its scripted baseline was not written for; ``""`` is the ordinary world.
+    variants: ClassVar[tuple[str, ...]] = ("",)
+
+    def __init__(
+        self,
+        task: PlanningTask,
+        *,
+        seed: int | None = 0,
+        fail_rate: float = 0.0,
+        facts: Iterable[Fact] | None = None,
+        variant: str = "",
+    ) -> None:
+        if variant not in self.variants:
+            raise ValueError(f"unknown variant {variant!r}; variants: {', '.join(self.variants)}")
+        if not 0.0 <= fail_rate <= 1.0:
+            raise ValueError(f"fail_rate must be between 0 and 1, got {fail_rate}")
+        self.task = task
+        self.model = ActionModel(task)
+        self.rng = random.Random(seed)
+        self.fail_rate = fail_rate
+        self.variant = variant
+        self._facts: set[Fact] = set(task.initial_facts if facts is None else facts)
+        self._lock = threading.Lock()
+        self.faults: list[Fault] = []
+        self.sim_time = 0.0
+        self.actions_run = 0
+
+    @property
+    def faults_injected(self) -> int:
+        return len(self.faults)
+
+    def chance(self, kind: str, rng: random.Random | None = None) -> bool:
+        """Draw whether a fault of ``kind`` happens now.
+
+        Its probability is ``fail_rate x fault_scale[kind]``, at most 1, drawn from
+        ``rng`` (default: the world's seeded :attr:`rng`). A probability of 0 draws
+        nothing, so a run without faults uses no random numbers. Only decides: record
+        the fault with :meth:`inject` where it happens.
+        """
+        probability = min(1.0, self.fail_rate * self.fault_scale[kind])
+        return probability > 0.0 and (self.rng if rng is None else rng).random() < probability
+
+    def inject(self, kind: str, action: str, detail: str = "", time: float | None = None) -> Fault:
+        """Record a fault (call it where the world decides one happens).
+
+        ``time`` defaults to :attr:`sim_time`; worlds with a clock per robot pass theirs.
+        """
+        fault = Fault(self.sim_time if time is None else time, kind, action, detail)
+        self.faults.append(fault)
+        return fault
+
+    def snapshot(self) -> dict[str, Any]:
+        """The world's state as JSON data (for checkpoints; subclasses add their own)."""
+        with self._lock:
+            version, internal, gauss = self.rng.getstate()
+            return {
+                "facts": sorted(" ".join(f) for f in self._facts),
+                "sim_time": self.sim_time,
+                "actions_run": self.actions_run,
+                "faults": [dataclasses.asdict(f) for f in self.faults],
+                "rng": [version, list(internal), gauss],
+            }
+
+    def restore(self, data: dict[str, Any]) -> None:
+        """Put the world back into a :meth:`snapshot` state."""
+        with self._lock:
+            self._facts = {tuple(f.split()) for f in data["facts"]}
+            self.sim_time = float(data["sim_time"])
+            self.actions_run = int(data.get("actions_run", 0))
+            self.faults = [Fault(**f) for f in data.get("faults", [])]
+            version, internal, gauss = data["rng"]
+            self.rng.setstate((version, tuple(internal), gauss))
+
+    def goal_reached(self) -> bool:
+        """Whether the task's goal holds in the true world."""
+        return self.model.goal_holds(self.facts)
+
+    @property
+    def facts(self) -> frozenset[Fact]:
+        with self._lock:
+            return frozenset(self._facts)
+
+    def holds(self, *fact: str) -> bool:
+        """Whether a fact is true in the world: ``world.holds("at", "pr2", "kitchen")``."""
+        with self._lock:
+            return fact in self._facts
+
+    def perform(self, step: PlanStep) -> tuple[bool, list[tuple[Fact, bool]]]:
+        """Try ``step`` in the world: (succeeded?, observations of the touched facts)."""
+        ground = self.model.ground(step)
+        with self._lock:
+            self.actions_run += 1
+            self.sim_time += self.action_duration
+            # The live set, not a copy: worlds with many static facts would pay a copy
+            # of all of them per action.
+            state = self._facts
+            adds, dels = ground.effects(state)
+            touched = ground.relevant_atoms(state, (adds, dels))
+            ok = ground.applicable(state)
+            if ok and self.fail_rate and self.rng.random() < self.fail_rate:
+                self.inject("action-failed", str(step), "the action had no effect")
+                ok = False
+            if ok:
+                state.difference_update(dels)
+                state.update(adds)
+            observations = [(fact, fact in state) for fact in sorted(touched)]
+        return ok, observations
+
+
+class SymbolicSkill(smach.State):
+    """A skill that performs its action in a :class:`SimulatedWorld`."""
+
+    def __init__(self, world: SimulatedWorld, step: PlanStep) -> None:
+        super().__init__(
+            outcomes=["succeeded", "aborted", "preempted"], output_keys=["observations"]
+        )
+        self.world = world
+        self.step = step
+
+    def execute(self, ud: smach.UserData) -> str:
+        if self.preempt_requested():
+            self.service_preempt()
+            return "preempted"
+        ok, observations = self.world.perform(self.step)
+        ud.observations = observations
+        return "succeeded" if ok else "aborted"
+
+
+def symbolic_skills(world: SimulatedWorld, registry: SkillRegistry | None = None) -> SkillRegistry:
+    """A registry whose unregistered actions run as symbolic skills in ``world``."""
+    registry = registry or SkillRegistry()
+    registry.fallback = lambda step: SymbolicSkill(world, step)
+    return registry

@@ -1,0 +1,182 @@
+"""Targets of ``plan-bridge run``/``check``: a domain folder or a bare domain.pddl.
+
+A domain folder holds ``domain.pddl``, ``problems/*.pddl`` and, optionally, Python:
+an ``__init__.py`` (or ``skills.py``) defining::
+
+    def setup(task: PlanningTask, *, seed: int, fail_rate: float) -> MissionSetup
+
+which returns the skills (and the simulated world) of the mission, and optionally::
+
+    def scripted(task: PlanningTask, *, seed: int, fail_rate: float) -> ScriptedMission
+
+the same mission written by hand as one SMACH machine (the baseline). Loading a domain
+folder runs its Python code, like importing a module: only run domains you trust.
+Without Python, or for a bare ``domain.pddl``, every action runs as a symbolic skill
+in a simulated world.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import ModuleType
+from typing import TYPE_CHECKING, Any
+
+from plan_bridge.errors import PlanBridgeError
+from plan_bridge.execution.simulation import SimulatedWorld, symbolic_skills
+from plan_bridge.pddl.task import PlanningTask, load_task
+from plan_bridge.skills.registry import SkillRegistry
+
+if TYPE_CHECKING:
+    from plan_bridge.planning.worker import WorkerPool
+
+__all__ = ["MissionSetup", "ScriptedMission", "Target", "TargetError", "load_target"]
+
+
+class TargetError(PlanBridgeError):
+    """A run target is missing, malformed, or its Python code failed to load."""
+
+
+@dataclass
+class MissionSetup:
+    """What a domain provides for a run: skills and, optionally, more."""
+
+    skills: SkillRegistry
+    world: Any = None
+    """The simulated world (reported in summaries if it has ``faults_injected``)."""
+    sense: Callable[[Any], Iterable[Any]] | None = None
+    concurrent: bool = False
+    """Run independent steps (e.g. of two robots) concurrently."""
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass
+class ScriptedMission:
+    """The hand-written baseline of a domain: one SMACH machine with explicit recovery.
+
+    ``machine.execute()`` runs the whole mission in ``world`` (no planner); success is
+    judged by ``world.goal_reached()``, the same check as for planned runs.
+    """
+
+    machine: Any
+    """A ``smach.State`` (normally a StateMachine) whose userdata is already filled."""
+    world: Any
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass
+class Target:
+    """A loaded run target."""
+
+    name: str
+    domain_path: Path
+    problem_path: Path
+    task: PlanningTask
+    folder: Path | None = None
+    module: ModuleType | None = None
+
+    @property
+    def problems(self) -> list[Path]:
+        """Every problem of the folder (or just the given one)."""
+        if self.folder is None:
+            return [self.problem_path]
+        return sorted((self.folder / "problems").glob("*.pddl"))
+
+    def setup(self, *, seed: int, fail_rate: float) -> MissionSetup:
+        """Skills and world for one run."""
+        factory = getattr(self.module, "setup", None) if self.module is not None else None
+        if factory is None:
+            world = SimulatedWorld(self.task, seed=seed, fail_rate=fail_rate)
+            return MissionSetup(skills=symbolic_skills(world), world=world)
+        try:
+            result = factory(self.task, seed=seed, fail_rate=fail_rate)
+        except PlanBridgeError:
+            raise
+        except Exception as exc:
+            raise TargetError(f"{self.folder}: setup() raised {type(exc).__name__}: {exc}") from exc
+        if not isinstance(result, MissionSetup):
+            raise TargetError(
+                f"{self.folder}: setup() returned {type(result).__name__}; it must return a "
+                f"plan_bridge.missions.mission.MissionSetup"
+            )
+        return result
+
+
+def load_target(
+    target: str | Path,
+    problem: str | Path | None = None,
+    *,
+    prime: WorkerPool | None = None,
+    before_parse: Callable[[], object] | None = None,
+) -> Target:
+    """Load a domain folder or a domain.pddl (then ``problem`` is required).
+
+    ``prime`` (a planner worker pool that parses the task in parallel) and
+    ``before_parse`` are those of :func:`~plan_bridge.pddl.task.load_task`.
+    """
+    path = Path(target)
+    if not path.exists():
+        raise TargetError(
+            f"{path}: no such file or folder; expected a domain folder (with domain.pddl and "
+            f"problems/) or a domain .pddl file"
+        )
+    if path.is_dir():
+        domain = path / "domain.pddl"
+        if not domain.is_file():
+            raise TargetError(f"{path}: a domain folder must contain domain.pddl")
+        if problem is None:
+            problems = sorted((path / "problems").glob("*.pddl"))
+            if not problems:
+                raise TargetError(f"{path}: no problems/*.pddl; give one with --problem")
+            problem_path = problems[0]
+        else:
+            problem_path = _problem_path(Path(problem), path)
+        task = load_task(domain, problem_path, prime=prime, before_parse=before_parse)
+        return Target(path.name, domain, problem_path, task, path, _load_module(path))
+    if problem is None:
+        raise TargetError(f"{path}: a bare domain file needs --problem PROBLEM.pddl")
+    problem_path = Path(problem)
+    task = load_task(path, problem_path, prime=prime, before_parse=before_parse)
+    name = path.parent.name if path.stem == "domain" and path.parent.name else path.stem
+    return Target(name, path, problem_path, task)
+
+
+def _problem_path(problem: Path, folder: Path) -> Path:
+    """Accept a path, or a name inside the folder's problems/ (with or without .pddl)."""
+    if problem.exists():
+        return problem
+    for candidate in (folder / "problems" / problem, folder / "problems" / f"{problem}.pddl"):
+        if candidate.is_file():
+            return candidate
+    names = ", ".join(p.stem for p in sorted((folder / "problems").glob("*.pddl")))
+    raise TargetError(f"{problem}: no such problem; problems of {folder.name}: {names or 'none'}")
+
+
+def _load_module(folder: Path) -> ModuleType | None:
+    """Import the folder's Python as a package (so its modules import each other)."""
+    entry = folder / "__init__.py"
+    if not entry.is_file():
+        entry = folder / "skills.py"
+        if not entry.is_file():
+            return None
+    name = f"plan_bridge_domain_{folder.resolve().name}_{abs(hash(str(folder.resolve())))}"
+    if name in sys.modules:
+        return sys.modules[name]
+    spec = importlib.util.spec_from_file_location(
+        name, entry, submodule_search_locations=[str(folder)]
+    )
+    if spec is None or spec.loader is None:
+        raise TargetError(f"{entry}: cannot be imported")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    try:
+        spec.loader.exec_module(module)
+    except Exception as exc:
+        del sys.modules[name]
+        raise TargetError(
+            f"{entry}: importing the domain's Python failed: {type(exc).__name__}: {exc}"
+        ) from exc
+    return module

@@ -1,0 +1,581 @@
+"""PDDL source text: reading, structural pre-checks and error locations.
+
+unified-planning parses PDDL with pyparsing. Given a file that is binary, huge,
+unbalanced or nested thousands deep it produces a long traceback, a
+``RecursionError`` or minutes of backtracking; given a construct it does not know
+(``(either ...)`` types, derived predicates) it reports a generic
+``Expected ')', found '('`` at the start of the surrounding form. So every file is
+checked here first, with a cheap regular-expression tokenizer that knows line and
+column of every token, and nothing reaches the parser that we can explain better
+ourselves. None of this imports unified-planning, so bad input fails fast.
+"""
+
+from __future__ import annotations
+
+import bisect
+import difflib
+import hashlib
+import re
+from collections.abc import Iterable, Iterator, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from plan_bridge.errors import PddlError, UnsupportedFeatureError
+
+__all__ = [
+    "DEFAULT_MAX_BYTES",
+    "DEFAULT_MAX_DEPTH",
+    "UP_REQUIREMENTS",
+    "ProblemText",
+    "SourceText",
+    "check_source",
+    "decode_source",
+    "read_source",
+    "replace_init",
+]
+
+DEFAULT_MAX_BYTES = 5_000_000
+DEFAULT_MAX_DEPTH = 200
+
+#: Requirement flags accepted by the unified-planning 1.3 PDDL grammar.
+UP_REQUIREMENTS = frozenset(
+    [
+        ":strips",
+        ":typing",
+        ":negative-preconditions",
+        ":disjunctive-preconditions",
+        ":equality",
+        ":existential-preconditions",
+        ":universal-preconditions",
+        ":quantified-preconditions",
+        ":conditional-effects",
+        ":fluents",
+        ":numeric-fluents",
+        ":adl",
+        ":durative-actions",
+        ":duration-inequalities",
+        ":timed-initial-literals",
+        ":timed-initial-effects",
+        ":action-costs",
+        ":hierarchy",
+        ":method-preconditions",
+        ":constraints",
+        ":contingent",
+        ":preferences",
+        ":time",
+        ":continuous-effects",
+    ]
+)
+
+#: Real PDDL requirements that unified-planning 1.3 cannot read.
+_KNOWN_UNSUPPORTED_REQUIREMENTS = {
+    ":derived-predicates": "derived predicates (axioms)",
+    ":object-fluents": "object-valued fluents",
+}
+
+_TOKEN = re.compile(r";[^\n]*|\(|\)|[^\s();]+")
+
+#: Section keywords of each kind of file (PDDL 1.2 to 3.1, PDDL+ and HTN).
+_SECTIONS = {
+    "domain": frozenset(
+        [
+            ":requirements",
+            ":types",
+            ":constants",
+            ":predicates",
+            ":functions",
+            ":action",
+            ":durative-action",
+            ":derived",
+            ":constraints",
+            ":process",
+            ":event",
+            ":task",
+            ":method",
+            ":extends",
+            ":timeless",
+        ]
+    ),
+    "problem": frozenset(
+        [
+            ":domain",
+            ":requirements",
+            ":objects",
+            ":init",
+            ":goal",
+            ":constraints",
+            ":metric",
+            ":htn",
+            ":length",
+            ":situation",
+        ]
+    ),
+}
+
+#: The keywords an action's definition may use.
+_ACTION_KEYWORDS = {
+    ":action": (":parameters", ":precondition", ":effect"),
+    ":durative-action": (":parameters", ":duration", ":condition", ":effect"),
+}
+
+
+@dataclass(frozen=True)
+class Token:
+    text: str
+    offset: int
+
+
+class SourceText:
+    """The text of one PDDL file with position helpers.
+
+    ``kind`` is ``"domain"`` or ``"problem"`` (what the file is expected to hold).
+    """
+
+    def __init__(self, text: str, path: str, kind: str) -> None:
+        self.text = text
+        self.path = path
+        self.kind = kind
+        self._line_starts = [0] + [m.end() for m in re.finditer("\n", text)]
+        self._tokens: list[Token] | None = None
+
+    # -- positions -------------------------------------------------------------
+    def line_col(self, offset: int) -> tuple[int, int]:
+        """1-based (line, column) of a character offset."""
+        index = bisect.bisect_right(self._line_starts, offset) - 1
+        return index + 1, offset - self._line_starts[index] + 1
+
+    def offset_of(self, line: int, column: int) -> int:
+        line = max(1, min(line, len(self._line_starts)))
+        return self._line_starts[line - 1] + max(column, 1) - 1
+
+    def excerpt(self, line: int, column: int) -> str:
+        """The source line and a caret under ``column`` (tabs kept for alignment)."""
+        lines = self.text.splitlines()
+        if not 1 <= line <= len(lines):
+            return ""
+        row = lines[line - 1]
+        if len(row) > 160:
+            start = max(0, column - 80)
+            row = row[start : start + 160]
+            column -= start
+        marker = "".join("\t" if ch == "\t" else " " for ch in row[: column - 1]) + "^"
+        return f"{row}\n{marker}"
+
+    def error(
+        self,
+        explanation: str,
+        offset: int | None,
+        hint: str = "",
+        *,
+        feature: str | None = None,
+        supporting_engines: tuple[str, ...] = (),
+    ) -> PddlError:
+        """A :class:`PddlError` (or :class:`UnsupportedFeatureError`) at ``offset``."""
+        line = column = None
+        excerpt = ""
+        if offset is not None:
+            line, column = self.line_col(offset)
+            excerpt = self.excerpt(line, column)
+        if feature is not None:
+            return UnsupportedFeatureError(
+                explanation,
+                feature=feature,
+                supporting_engines=supporting_engines,
+                path=self.path,
+                line=line,
+                column=column,
+                excerpt=excerpt,
+                hint=hint,
+            )
+        return PddlError(
+            explanation, path=self.path, line=line, column=column, excerpt=excerpt, hint=hint
+        )
+
+    # -- tokens ----------------------------------------------------------------
+    @property
+    def tokens(self) -> list[Token]:
+        if self._tokens is None:
+            self._tokens = [
+                Token(m.group().lower(), m.start())
+                for m in _TOKEN.finditer(self.text)
+                if not m.group().startswith(";")
+            ]
+        return self._tokens
+
+    def sections(self) -> Iterator[tuple[str, int, int]]:
+        """Top-level sections of the ``define`` form: (head, start, end) offsets.
+
+        ``head`` is the section keyword plus, for actions, the action name
+        (``":action lift"``); for the ``(domain x)`` / ``(problem x)`` header it is
+        ``"domain"`` / ``"problem"``.
+        """
+        tokens = self.tokens
+        depth = 0
+        start = -1
+        head = ""
+        for index, token in enumerate(tokens):
+            if token.text == "(":
+                depth += 1
+                if depth == 2:
+                    start = token.offset
+                    nxt = tokens[index + 1].text if index + 1 < len(tokens) else ""
+                    head = nxt
+                    if nxt in {":action", ":durative-action", ":derived"} and index + 2 < len(
+                        tokens
+                    ):
+                        head = f"{nxt} {tokens[index + 2].text}"
+            elif token.text == ")":
+                if depth == 2:
+                    yield head, start, token.offset + 1
+                depth -= 1
+
+    def section_at(self, offset: int) -> str | None:
+        for head, start, end in self.sections():
+            if start <= offset < end:
+                return head
+        return None
+
+
+def read_source(path: str | Path, kind: str, *, max_bytes: int = DEFAULT_MAX_BYTES) -> SourceText:
+    """Read a PDDL file, refusing what cannot be PDDL text.
+
+    Raises :class:`PddlError` for a missing/unreadable file, a file larger than
+    ``max_bytes``, binary content or text that is not UTF-8.
+    """
+    shown = str(path)
+    file = Path(path)
+    try:
+        size = file.stat().st_size
+    except FileNotFoundError as exc:
+        raise PddlError(
+            f"{kind} file not found", path=shown, hint=f"expected a PDDL {kind} file"
+        ) from exc
+    except OSError as exc:
+        raise PddlError(f"cannot access {kind} file: {exc.strerror}", path=shown) from exc
+    if file.is_dir():
+        raise PddlError(f"is a directory, expected a PDDL {kind} file", path=shown)
+    if size > max_bytes:
+        raise PddlError(
+            f"{kind} file is {size / 1e6:.1f} MB, larger than the {max_bytes / 1e6:.1f} MB limit",
+            path=shown,
+            hint="raise the limit with max_bytes=... if this file is really meant to be loaded",
+        )
+    try:
+        data = file.read_bytes()
+    except OSError as exc:
+        raise PddlError(f"cannot read {kind} file: {exc.strerror}", path=shown) from exc
+    return decode_source(data, shown, kind)
+
+
+def decode_source(data: bytes, path: str, kind: str) -> SourceText:
+    """Decode bytes as UTF-8 PDDL text (a BOM is allowed), refusing binary data."""
+    nul = data.find(b"\x00")
+    if nul >= 0:
+        line = data.count(b"\n", 0, nul) + 1
+        column = nul - (data.rfind(b"\n", 0, nul) + 1) + 1
+        raise PddlError(
+            f"binary data (a NUL byte) in the {kind} file: this is not a PDDL text file",
+            path=path,
+            line=line,
+            column=column,
+        )
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        column = exc.start - (data.rfind(b"\n", 0, exc.start) + 1) + 1
+        raise PddlError(
+            f"the {kind} file is not UTF-8 text (invalid byte 0x{data[exc.start]:02x})",
+            path=path,
+            line=line,
+            column=column,
+            hint="PDDL files must be plain ASCII/UTF-8 text",
+        ) from exc
+    return SourceText(text, path, kind)
+
+
+def check_source(source: SourceText, *, max_depth: int = DEFAULT_MAX_DEPTH) -> None:
+    """Structural checks: balanced parentheses, bounded nesting, right file kind,
+    and the constructs unified-planning 1.3 cannot read."""
+    tokens = source.tokens
+    if not tokens:
+        raise source.error(
+            f"the {source.kind} file is empty (only whitespace or comments)",
+            None,
+            hint=f"expected (define ({source.kind} NAME) ...)",
+        )
+    _check_parentheses(source, max_depth)
+    _check_header(source)
+    _check_keywords(source)
+    _check_constructs(source)
+
+
+def _check_parentheses(source: SourceText, max_depth: int) -> None:
+    open_offsets: list[int] = []
+    tokens = source.tokens
+    for index, token in enumerate(tokens):
+        if token.text == "(":
+            open_offsets.append(token.offset)
+            if len(open_offsets) > max_depth:
+                raise source.error(
+                    f"parentheses nested deeper than {max_depth} levels",
+                    token.offset,
+                    hint="real PDDL is rarely nested more than 20 deep; is the file generated "
+                    "wrongly?",
+                )
+        elif token.text == ")":
+            if not open_offsets:
+                raise source.error(
+                    "unbalanced parentheses: this ')' has no matching '('",
+                    token.offset,
+                )
+            open_offsets.pop()
+            if not open_offsets and index + 1 < len(tokens):
+                line, column = source.line_col(tokens[index + 1].offset)
+                raise source.error(
+                    "unbalanced parentheses: this ')' closes the (define ...) form, but more "
+                    f"text follows at {line}:{column}",
+                    token.offset,
+                    hint="is this an extra ')'? A PDDL file holds exactly one (define ...) form",
+                )
+    if open_offsets:
+        innermost = open_offsets[-1]
+        line, column = source.line_col(open_offsets[0])
+        raise source.error(
+            f"unbalanced parentheses: the file ends while {len(open_offsets)} '(' are still "
+            f"open; the innermost unclosed '(' is here (the outermost opened at "
+            f"{line}:{column})",
+            innermost,
+            hint="is the file truncated, or is a ')' missing?",
+        )
+
+
+def _check_header(source: SourceText) -> None:
+    tokens = source.tokens
+    other = "problem" if source.kind == "domain" else "domain"
+    if len(tokens) < 4 or tokens[0].text != "(" or tokens[1].text != "define":
+        first = tokens[1] if len(tokens) > 1 and tokens[0].text == "(" else tokens[0]
+        raise source.error(
+            f"expected (define ({source.kind} NAME) ...), found {first.text!r}",
+            first.offset,
+        )
+    if tokens[2].text != "(" or tokens[3].text not in {"domain", "problem"}:
+        raise source.error(
+            f"expected ({source.kind} NAME) after 'define', found {tokens[3].text!r}",
+            tokens[3].offset if tokens[2].text == "(" else tokens[2].offset,
+        )
+    if tokens[3].text == other:
+        raise source.error(
+            f"this is a PDDL {other} file, but a {source.kind} file was expected here",
+            tokens[3].offset,
+            hint="pass the domain file first and the problem file second",
+        )
+
+
+def _check_keywords(source: SourceText) -> None:
+    """Section keywords, and the keywords of every action: a misspelt one gets its
+    name, place and the allowed ones (unified-planning would say ``Expected ')'``)."""
+    tokens = source.tokens
+    allowed_sections = _SECTIONS[source.kind]
+    depth = 0
+    keywords: tuple[str, ...] = ()
+    where = ""
+    for index, token in enumerate(tokens):
+        if token.text == "(":
+            depth += 1
+            if depth == 2 and index + 1 < len(tokens):
+                head = tokens[index + 1]
+                keywords = ()
+                if head.text in {"domain", "problem"} and index == 2:
+                    continue
+                if head.text not in allowed_sections:
+                    raise source.error(
+                        f"unknown {source.kind} section {head.text!r}"
+                        + _did_you_mean(head.text, allowed_sections),
+                        head.offset,
+                        hint=f"a {source.kind} file has the sections "
+                        + " ".join(sorted(allowed_sections)),
+                    )
+                if head.text in _ACTION_KEYWORDS and index + 2 < len(tokens):
+                    keywords = _ACTION_KEYWORDS[head.text]
+                    where = f"({head.text} {tokens[index + 2].text} ...)"
+        elif token.text == ")":
+            depth -= 1
+        elif (
+            depth == 2
+            and keywords
+            and token.text.startswith(":")
+            and token.text not in keywords
+            and tokens[index - 1].text != "("  # the section's own keyword
+        ):
+            raise source.error(
+                f"unknown keyword {token.text!r} in {where}" + _did_you_mean(token.text, keywords),
+                token.offset,
+                hint=f"({where.split()[0][1:]} NAME ...) takes "
+                + ", ".join(keywords[:-1])
+                + f" and {keywords[-1]}",
+            )
+
+
+def _did_you_mean(word: str, choices: Iterable[str]) -> str:
+    close = difflib.get_close_matches(word, list(choices), n=1, cutoff=0.6)
+    return f" (did you mean {close[0]}?)" if close else ""
+
+
+def _check_constructs(source: SourceText) -> None:
+    tokens = source.tokens
+    for index, token in enumerate(tokens[:-1]):
+        if token.text != "(":
+            continue
+        head = tokens[index + 1].text
+        if head == "either":
+            raise _either_error(source, index)
+        if head == ":requirements":
+            _check_requirements(source, index + 2)
+        elif head == ":derived":
+            raise source.error(
+                "unsupported PDDL construct `(:derived ...)` (derived predicates): the "
+                "unified-planning 1.3 PDDL reader cannot read it",
+                token.offset,
+                hint="compile the axioms away (e.g. into actions) before loading",
+                feature="derived-predicates",
+            )
+
+
+def _check_requirements(source: SourceText, index: int) -> None:
+    tokens = source.tokens
+    while index < len(tokens) and tokens[index].text != ")":
+        flag = tokens[index]
+        if flag.text in _KNOWN_UNSUPPORTED_REQUIREMENTS:
+            raise source.error(
+                f"unsupported PDDL requirement {flag.text} "
+                f"({_KNOWN_UNSUPPORTED_REQUIREMENTS[flag.text]}): the unified-planning 1.3 "
+                "PDDL reader cannot read it",
+                flag.offset,
+                hint="supported requirements: " + " ".join(sorted(UP_REQUIREMENTS)),
+                feature=flag.text,
+            )
+        if flag.text not in UP_REQUIREMENTS:
+            raise source.error(
+                f"unknown PDDL requirement {flag.text!r}",
+                flag.offset,
+                hint="allowed requirements: " + " ".join(sorted(UP_REQUIREMENTS)),
+            )
+        index += 1
+
+
+def _either_error(source: SourceText, index: int) -> PddlError:
+    tokens = source.tokens
+    members: list[str] = []
+    position = index + 2
+    while position < len(tokens) and tokens[position].text != ")":
+        members.append(tokens[position].text)
+        position += 1
+    where = source.section_at(tokens[index].offset) or "the domain"
+    hint = (
+        "unified-planning 1.3 accepts only single type names after '-'. "
+        "Declare a common supertype and use it instead"
+    )
+    common = _common_supertype(source, members)
+    if common:
+        hint += f": here `{common}` is a supertype of {', '.join(members)}"
+    hint += ". (Fast Downward's own translator accepts `either`, but plan_bridge reads PDDL "
+    hint += "through unified-planning.)"
+    return source.error(
+        f"unsupported PDDL construct `(either {' '.join(members)})` (either-types: a union "
+        f"of types) in {where}; the unified-planning 1.3 PDDL reader rejects it",
+        tokens[index].offset,
+        hint=hint,
+        feature="either-types",
+    )
+
+
+def _common_supertype(source: SourceText, members: list[str]) -> str | None:
+    """The most specific declared type that all ``members`` inherit from."""
+    parents: dict[str, str] = {}
+    for head, start, end in source.sections():
+        if head != ":types":
+            continue
+        words = [t.text for t in source.tokens if start < t.offset < end and t.text not in "()"]
+        pending: list[str] = []
+        position = 1  # skip ':types'
+        while position < len(words):
+            word = words[position]
+            if word == "-" and position + 1 < len(words):
+                for name in pending:
+                    parents[name] = words[position + 1]
+                pending = []
+                position += 2
+                continue
+            pending.append(word)
+            position += 1
+    if not members:
+        return None
+
+    def ancestors(name: str) -> list[str]:
+        chain = [name]
+        while chain[-1] in parents and parents[chain[-1]] not in chain:
+            chain.append(parents[chain[-1]])
+        return chain
+
+    candidates = ancestors(members[0])
+    for member in members[1:]:
+        others = set(ancestors(member))
+        candidates = [c for c in candidates if c in others]
+    return candidates[0] if candidates else None
+
+
+def replace_init(problem: SourceText, facts: Iterable[Sequence[str]]) -> str:
+    """The problem text with its ``(:init ...)`` boolean facts replaced by ``facts``.
+
+    Numeric assignments (``(= (total-cost) 0)``) and timed initial literals are
+    kept: replanning changes what is true, not the costs of actions.
+    """
+    for head, start, end in problem.sections():
+        if head != ":init":
+            continue
+        kept: list[str] = []
+        keep = False
+        depth = 0
+        form_start = 0
+        tokens = [t for t in problem.tokens if start < t.offset < end - 1]
+        for index, token in enumerate(tokens):
+            if token.text == "(":
+                if depth == 0:
+                    form_start = token.offset
+                    nxt = tokens[index + 1].text if index + 1 < len(tokens) else ""
+                    after = tokens[index + 2].text if index + 2 < len(tokens) else ""
+                    keep = nxt == "=" or (nxt == "at" and _is_number(after))
+                depth += 1
+            elif token.text == ")":
+                depth -= 1
+                if depth == 0 and keep:
+                    kept.append(problem.text[form_start : token.offset + 1])
+        body = " ".join(["(" + " ".join(fact) + ")" for fact in facts] + kept)
+        return problem.text[:start] + f"(:init {body})" + problem.text[end:]
+    raise problem.error("the problem has no (:init ...) section", None)
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+@dataclass(frozen=True)
+class ProblemText:
+    """The PDDL text of a base problem and the key workers cache its parse under."""
+
+    domain: str
+    problem: str
+    key: str
+
+    @classmethod
+    def of(cls, domain: str, problem: str) -> ProblemText:
+        digest = hashlib.sha256()
+        digest.update(domain.encode("utf-8"))
+        digest.update(b"\0")
+        digest.update(problem.encode("utf-8"))
+        return cls(domain, problem, digest.hexdigest()[:32])

@@ -1,0 +1,544 @@
+"""Planners: unified-planning engines behind one protocol, with hard time limits.
+
+>>> task = load_task("domain.pddl", "problem.pddl")          # doctest: +SKIP
+>>> result = get_planner("fast-downward").solve(task, timeout=10)  # doctest: +SKIP
+>>> [str(step) for step in result.actions]                  # doctest: +SKIP
+['(pick ball1 rooma left)', ...]
+
+"No plan" is a :class:`PlanResult`, never an exception: its ``status`` says what
+happened (unsolvable, timeout, unsupported, error) and ``explanation`` says why,
+e.g. the goal atoms that are unreachable even under delete relaxation.
+
+Every solve runs in a warm worker process (:mod:`plan_bridge.planning.worker`) that is
+killed at the deadline, so ``timeout`` holds for engines that ignore it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+import threading
+import time
+import warnings
+import weakref
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+from typing import Any, Protocol, runtime_checkable
+
+from plan_bridge.errors import PlannerNotFoundError
+from plan_bridge.pddl.reachability import ReachabilityReport, relaxed_unreachable_goals
+from plan_bridge.pddl.task import Fact, FactLike, PlanningTask, format_fact
+from plan_bridge.pddl.up_runtime import ensure_unified_planning, lean_copy
+from plan_bridge.planning.worker import ProblemText, SolveReply, WorkerPool, default_pool
+
+__all__ = [
+    "DEFAULT_PLANNER",
+    "PlanResult",
+    "PlanStatus",
+    "PlanStep",
+    "Planner",
+    "UPPlanner",
+    "get_planner",
+    "installed_planners",
+]
+
+DEFAULT_PLANNER = "fast-downward"
+
+# Engines that warn they ignore UP's timeout: the worker kill enforces it anyway,
+# so the warning is noise for our users.
+_IGNORED_WARNINGS = ("does not support timeout",)
+
+
+class PlanStatus(str, enum.Enum):
+    """What a solve ended with."""
+
+    SOLVED = "solved"
+    UNSOLVABLE = "unsolvable"
+    TIMEOUT = "timeout"
+    ERROR = "error"
+    UNSUPPORTED = "unsupported"
+
+
+@dataclass(frozen=True)
+class PlanStep:
+    """One ground action of a plan: ``PlanStep("pick", ("cup", "table"))``."""
+
+    action: str
+    arguments: tuple[str, ...] = ()
+
+    def __str__(self) -> str:
+        return "(" + " ".join((self.action, *self.arguments)) + ")"
+
+
+@dataclass(frozen=True)
+class PlanResult:
+    """The outcome of one solve."""
+
+    status: PlanStatus
+    actions: list[PlanStep] = field(default_factory=list)
+    planner: str = ""
+    planning_time_s: float = 0.0
+    """Wall-clock time of the whole ``solve`` call (PDDL writing, worker, analysis)."""
+    explanation: str = ""
+    """Why there is no plan (empty when solved)."""
+    warnings: tuple[str, ...] = ()
+    """Warnings of unified-planning and the engine during this solve."""
+    unreachable_goals: tuple[Fact, ...] = ()
+    """Goal atoms unreachable under delete relaxation (when that was the reason)."""
+    engine_status: str = ""
+    """The engine's own status (UP ``PlanGenerationResultStatus`` name)."""
+    engine_time_s: float = 0.0
+    """Time spent in the engine inside the worker."""
+    log: str = ""
+    """The tail of the engine's log."""
+    problem_reused: bool = False
+    """True when the worker derived the problem from one it had parsed before (a
+    replan's fast path: no PDDL parsing)."""
+
+    @property
+    def solved(self) -> bool:
+        return self.status is PlanStatus.SOLVED
+
+    def plan_strings(self) -> list[str]:
+        return [str(step) for step in self.actions]
+
+    def to_json(self) -> dict[str, Any]:
+        """A JSON-serialisable summary (the shape of ``plan-bridge plan --json``)."""
+        return {
+            "status": self.status.value,
+            "planner": self.planner,
+            "planning_time_s": round(self.planning_time_s, 4),
+            "plan_length": len(self.actions),
+            "plan": self.plan_strings(),
+            "explanation": self.explanation,
+            "unreachable_goals": [format_fact(goal) for goal in self.unreachable_goals],
+            "warnings": list(self.warnings),
+            "engine_status": self.engine_status,
+        }
+
+
+@runtime_checkable
+class Planner(Protocol):
+    """Anything that turns a :class:`PlanningTask` into a :class:`PlanResult`."""
+
+    @property
+    def name(self) -> str: ...
+
+    def solve(
+        self,
+        task: PlanningTask,
+        *,
+        timeout: float,
+        initial_state: Iterable[FactLike] | None = None,
+        goal: Iterable[FactLike] | None = None,
+    ) -> PlanResult:
+        """Plan for ``task``; ``initial_state`` (true ground facts) replaces the
+        task's initial state for this solve (closed world), and ``goal`` (ground
+        atoms) replaces its goal by their conjunction."""
+        ...
+
+
+def installed_planners() -> list[str]:
+    """Names of the installed unified-planning one-shot planners (meta engines such as
+    ``oversubscription[fast-downward]`` are accepted by :func:`get_planner` too but not
+    listed)."""
+    return [name for name in _oneshot_planners() if "[" not in name]
+
+
+def _oneshot_planners() -> list[str]:
+    ensure_unified_planning()
+    from unified_planning.shortcuts import get_environment  # type: ignore[import-untyped]
+
+    factory = get_environment().factory
+    names = []
+    for name in factory.engines:
+        try:
+            if factory.engine(name).is_oneshot_planner():
+                names.append(name)
+        except Exception:
+            continue
+    return names
+
+
+def get_planner(name: str = DEFAULT_PLANNER, *, pool: WorkerPool | None = None) -> UPPlanner:
+    """The planner called ``name``; raises :class:`PlannerNotFoundError` listing the
+    installed ones if there is none."""
+    return UPPlanner(name, pool=pool)
+
+
+class UPPlanner:
+    """A unified-planning one-shot planner engine, run in a killable worker process.
+
+    ``engine`` is a UP engine name: ``"fast-downward"`` (default),
+    ``"fast-downward-opt"``, ``"pyperplan"``, ``"pyperplan-opt"`` or any other
+    installed one-shot planner. ``explain_timeout`` bounds the delete-relaxation
+    analysis that explains a "no plan" answer.
+    """
+
+    def __init__(
+        self,
+        engine: str = DEFAULT_PLANNER,
+        *,
+        pool: WorkerPool | None = None,
+        explain_timeout: float = 5.0,
+    ) -> None:
+        available = _oneshot_planners()
+        if engine not in available:
+            raise PlannerNotFoundError(engine, [n for n in available if "[" not in n])
+        self._engine = engine
+        self._pool = pool
+        self.explain_timeout = explain_timeout
+        self._unsupported: weakref.WeakKeyDictionary[PlanningTask, list[str]] = (
+            weakref.WeakKeyDictionary()
+        )
+
+    @property
+    def name(self) -> str:
+        return self._engine
+
+    def __repr__(self) -> str:
+        return f"UPPlanner({self._engine!r})"
+
+    @property
+    def pool(self) -> WorkerPool:
+        return self._pool if self._pool is not None else default_pool()
+
+    def warm_up(self) -> None:
+        """Start a worker process now, so the first solve does not wait for it."""
+        self.pool.warm_up(1)
+
+    def supporting_engines(self, task: PlanningTask) -> list[str]:
+        """Installed planners whose declared capabilities cover ``task``."""
+        ensure_unified_planning()
+        from unified_planning.shortcuts import get_environment
+
+        factory = get_environment().factory
+        kind = task.problem.kind
+        return [name for name in installed_planners() if factory.engine(name).supports(kind)]
+
+    def _alternatives(self, task: PlanningTask) -> str:
+        supporting = [n for n in self.supporting_engines(task) if n != self._engine]
+        if supporting:
+            return f"Installed planners that support it: {', '.join(supporting)}"
+        others = []
+        for name in installed_planners():
+            if name != self._engine:
+                lacking = UPPlanner(name, pool=self._pool).unsupported_features(task)
+                others.append((len(lacking), name, lacking))
+        if not others:
+            return "No other planner is installed"
+        _, name, lacking = min(others)
+        return (
+            f"No installed planner declares full support; {name} lacks the fewest features "
+            f"({', '.join(lacking)}) and may still solve it"
+        )
+
+    def unsupported_features(self, task: PlanningTask) -> list[str]:
+        """Features of ``task`` this engine does not declare support for."""
+        ensure_unified_planning()
+        from unified_planning.shortcuts import get_environment
+
+        engine = get_environment().factory.engine(self._engine)
+        kind = task.problem.kind
+        try:
+            if engine.supports(kind):
+                return []
+            return sorted(set(kind.features) - set(engine.supported_kind().features))
+        except Exception:  # meta engines need a concrete problem to answer
+            return []
+
+    def solve(
+        self,
+        task: PlanningTask,
+        *,
+        timeout: float = 60.0,
+        initial_state: Iterable[FactLike] | None = None,
+        goal: Iterable[FactLike] | None = None,
+    ) -> PlanResult:
+        """Plan for ``task`` within ``timeout`` seconds of engine wall-clock time.
+
+        ``initial_state`` (true ground facts) replaces the task's initial state and
+        ``goal`` (ground atoms) replaces its goal by their conjunction, for this solve.
+        The worker keeps the parsed ``task`` (keyed by its PDDL text), so solving the
+        same task again with other facts or goal atoms -- a replan -- does not parse
+        PDDL again.
+
+        The limit is hard: the worker is killed at the deadline and the result has
+        status ``timeout``. (Starting a worker, about 0.5 s, happens before the
+        clock starts; :meth:`warm_up` moves it out of the way.) Raises
+        :class:`~plan_bridge.errors.FactError` for an ``initial_state`` fact or goal
+        atom that does not fit the task.
+        """
+        if timeout <= 0:
+            raise ValueError(f"timeout must be positive, got {timeout!r}")
+        started = time.monotonic()
+        facts = (
+            None
+            if initial_state is None
+            else frozenset(task.check_fact(fact) for fact in initial_state)
+        )
+        goal_atoms = None if goal is None else tuple(sorted({task.check_fact(a) for a in goal}))
+        # What the explanations of a "no plan" talk about (the UP problem stays the base's).
+        view = task
+        if facts is not None or goal_atoms is not None:
+            view = dataclasses.replace(
+                task,
+                initial_facts=task.initial_facts if facts is None else facts,
+                goal_facts=task.goal_facts if goal_atoms is None else goal_atoms,
+                goal_is_conjunctive=task.goal_is_conjunctive or goal_atoms is not None,
+            )
+        ensure_unified_planning()
+
+        notes: list[str] = []
+        missing = self._unsupported_cached(task)
+        if missing:
+            notes.append(
+                f"{self._engine} does not declare support for: {', '.join(missing)}; trying anyway"
+            )
+        try:
+            source = _problem_source(task)
+        except Exception as exc:
+            return self._finish(
+                view,
+                started,
+                PlanStatus.UNSUPPORTED,
+                f"cannot hand this problem to {self._engine} as PDDL: {exc}",
+                notes,
+            )
+        notes.extend(source.notes)
+        with self.pool.worker(prefer=source.text.key) as worker:
+            reply = worker.solve(
+                self._engine,
+                source.text,
+                timeout,
+                init=None if facts is None else [source.pddl_atom(f) for f in sorted(facts)],
+                goal=None if goal_atoms is None else [source.pddl_atom(a) for a in goal_atoms],
+            )
+        notes.extend(w for w in reply.warnings if not any(i in w for i in _IGNORED_WARNINGS))
+        result = self._interpret(view, started, timeout, reply, source.writer, notes, missing)
+        return dataclasses.replace(result, problem_reused=True) if reply.reused else result
+
+    def _unsupported_cached(self, task: PlanningTask) -> list[str]:
+        # Computing a UP problem kind takes up to ~0.2 s on large problems; replans of
+        # one task (other facts, positive goal atoms) have the same kind.
+        with _cache_lock:
+            cached = self._unsupported.get(task)
+        if cached is None:
+            cached = self.unsupported_features(task)
+            with _cache_lock:
+                self._unsupported[task] = cached
+        return list(cached)
+
+    # -- interpretation ----------------------------------------------------------
+    def _interpret(
+        self,
+        task: PlanningTask,
+        started: float,
+        timeout: float,
+        reply: SolveReply,
+        writer: Any,
+        notes: list[str],
+        missing: list[str],
+    ) -> PlanResult:
+        if reply.outcome == "result" and reply.status.startswith("SOLVED"):
+            if writer is None:
+                steps = [PlanStep(action, args) for action, args in reply.plan]
+            else:
+                # PDDLWriter renames what is not a valid PDDL name: map back.
+                steps = [
+                    PlanStep(
+                        writer.get_item_named(action).name,
+                        tuple(writer.get_item_named(arg).name for arg in args),
+                    )
+                    for action, args in reply.plan
+                ]
+            return self._finish(
+                task,
+                started,
+                PlanStatus.SOLVED,
+                "",
+                notes,
+                steps=steps,
+                log=reply.log,
+                engine_status=reply.status,
+                engine_time_s=reply.engine_time_s,
+            )
+        if reply.outcome == "result" and reply.status.startswith("UNSOLVABLE"):
+            report = relaxed_unreachable_goals(task, timeout=self.explain_timeout)
+            verdict = (
+                f"{self._engine} proved that no plan exists"
+                if reply.status == "UNSOLVABLE_PROVEN"
+                else f"{self._engine} found no plan (its search is incomplete, so this is "
+                "not a proof)"
+            )
+            return self._no_plan(
+                task, started, PlanStatus.UNSOLVABLE, verdict, report, notes, missing, reply
+            )
+        if reply.outcome == "timeout" or reply.status == "TIMEOUT":
+            verdict = f"{self._engine} found no plan within the {timeout:g} s time limit"
+            if reply.outcome == "timeout":
+                verdict += " (the planner process was killed)"
+            # A quick look may still prove the goal unreachable: then say so.
+            report = relaxed_unreachable_goals(task, timeout=min(1.0, self.explain_timeout))
+            status = PlanStatus.UNSOLVABLE if report.unreachable_goals else PlanStatus.TIMEOUT
+            return self._no_plan(task, started, status, verdict, report, notes, missing, reply)
+        if reply.outcome == "crashed":
+            return self._finish(
+                task,
+                started,
+                PlanStatus.ERROR,
+                f"{self._engine}: {reply.message}",
+                notes,
+                engine_status=reply.status,
+                engine_time_s=reply.engine_time_s,
+            )
+        # The engine raised, or returned MEMOUT / INTERNAL_ERROR / UNSUPPORTED_PROBLEM.
+        detail = reply.message or reply.log.strip().splitlines()[-1:] or [reply.status]
+        message = detail if isinstance(detail, str) else detail[0]
+        if (
+            missing
+            or reply.error_type == "UPUnsupportedProblemTypeError"
+            or (reply.status == "UNSUPPORTED_PROBLEM")
+        ):
+            explanation = (
+                f"{self._engine} cannot handle this problem"
+                + (f": it does not support {', '.join(missing)}" if missing else "")
+                + f" ({_first_line(message)}). {self._alternatives(task)}"
+            )
+            return self._finish(
+                task,
+                started,
+                PlanStatus.UNSUPPORTED,
+                explanation,
+                notes,
+                log=reply.log,
+                engine_status=reply.status,
+                engine_time_s=reply.engine_time_s,
+            )
+        kind = f"{reply.error_type}: " if reply.error_type else ""
+        return self._finish(
+            task,
+            started,
+            PlanStatus.ERROR,
+            f"{self._engine} failed: {kind}{_first_line(message)}",
+            notes,
+            log=reply.log,
+            engine_status=reply.status,
+            engine_time_s=reply.engine_time_s,
+        )
+
+    def _no_plan(
+        self,
+        task: PlanningTask,
+        started: float,
+        status: PlanStatus,
+        verdict: str,
+        report: ReachabilityReport,
+        notes: list[str],
+        missing: list[str],
+        reply: SolveReply,
+    ) -> PlanResult:
+        parts = [verdict]
+        if report.unreachable_goals:
+            parts.append(report.explanation())
+        elif status is PlanStatus.UNSOLVABLE and report.complete:
+            parts.append(
+                "every goal atom is reachable when delete effects are ignored, so the "
+                "conflict is between actions' delete effects or the goals themselves"
+            )
+        if missing:
+            parts.append(
+                f"note: {self._engine} does not declare support for {', '.join(missing)}, so "
+                "its answer may be unreliable"
+            )
+        return self._finish(
+            task,
+            started,
+            status,
+            "; ".join(parts),
+            notes,
+            unreachable_goals=report.unreachable_goals,
+            engine_status=reply.status or reply.outcome.upper(),
+            engine_time_s=reply.engine_time_s,
+            log=reply.log,
+        )
+
+    def _finish(
+        self,
+        task: PlanningTask,
+        started: float,
+        status: PlanStatus,
+        explanation: str,
+        notes: list[str],
+        *,
+        steps: list[PlanStep] | None = None,
+        unreachable_goals: tuple[Fact, ...] = (),
+        engine_status: str = "",
+        engine_time_s: float = 0.0,
+        log: str = "",
+    ) -> PlanResult:
+        del task  # kept in the signature for subclasses that want to report on it
+        return PlanResult(
+            status=status,
+            actions=steps or [],
+            planner=self._engine,
+            planning_time_s=time.monotonic() - started,
+            explanation=explanation,
+            warnings=tuple(dict.fromkeys(notes)),
+            unreachable_goals=unreachable_goals,
+            engine_status=engine_status,
+            engine_time_s=engine_time_s,
+            log=log,
+        )
+
+
+_cache_lock = threading.Lock()
+
+
+@dataclasses.dataclass(frozen=True)
+class _ProblemSource:
+    """How a task travels to the workers: its PDDL text and the names used in it."""
+
+    text: ProblemText
+    writer: Any = None
+    """UP's PDDLWriter, when the text was written from a problem built in code."""
+    problem: Any = None
+    """The problem the writer wrote (its items map to PDDL names)."""
+    notes: tuple[str, ...] = ()
+
+    def pddl_atom(self, fact: Fact) -> list[str]:
+        """``fact`` with the names the PDDL text uses."""
+        if self.writer is None:
+            return list(fact)
+        problem, name = self.problem, self.writer.get_pddl_name
+        return [name(problem.fluent(fact[0])), *(name(problem.object(a)) for a in fact[1:])]
+
+
+_written: weakref.WeakKeyDictionary[PlanningTask, _ProblemSource] = weakref.WeakKeyDictionary()
+
+
+def _problem_source(task: PlanningTask) -> _ProblemSource:
+    if task.domain_text is not None and task.problem_text is not None:
+        # Loaded from PDDL: the worker re-reads the very text we read, so names come
+        # back unchanged.
+        return _ProblemSource(ProblemText.of(task.domain_text, task.problem_text))
+    with _cache_lock:
+        cached = _written.get(task)
+    if cached is not None:
+        return cached
+    from unified_planning.io import PDDLWriter  # type: ignore[import-untyped]
+
+    problem = lean_copy(task.problem)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        writer = PDDLWriter(problem)
+        text = ProblemText.of(writer.get_domain(), writer.get_problem())
+    source = _ProblemSource(text, writer, problem, tuple(str(w.message) for w in caught))
+    with _cache_lock:
+        _written[task] = source
+    return source
+
+
+def _first_line(text: str) -> str:
+    stripped = text.strip()
+    return stripped.splitlines()[0] if stripped else ""

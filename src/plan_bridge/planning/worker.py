@@ -1,0 +1,683 @@
+"""Planner worker processes: a hard wall-clock limit for every engine.
+
+Each solve runs in a separate, killable process, because some engines ignore
+UP's ``timeout`` (pyperplan) and because up-fast-downward writes ``output.sas``
+into the current directory (so every solve gets its own working directory).
+
+Why a plain subprocess speaking JSON lines, not ``multiprocessing``:
+
+* ``spawn``/``forkserver`` re-import the user's ``__main__`` in the child, which
+  breaks scripts without an ``if __name__ == "__main__"`` guard;
+* the worker starts its own session, so on timeout we kill the whole process
+  group -- the worker *and* the Fast Downward translator/search processes it
+  started -- with one ``killpg``;
+* nothing is pickled: the task travels as PDDL text (written by UP's PDDLWriter),
+  the plan comes back as action and object names.
+
+Workers are kept warm in a :class:`WorkerPool`: unified-planning is imported once
+per worker (about 0.5 s), and a worker is only replaced after it was killed.
+Run as ``python -m plan_bridge.planning.worker`` it serves requests on stdin/stdout.
+
+**Replans do not re-parse.** A worker keeps the last :data:`BASE_CACHE_SIZE` parsed
+problems, keyed by a hash of their PDDL text (a :class:`ProblemText`). A request
+names its base problem by that key and may carry new initial facts and a new goal
+(lists of atoms); the worker derives the problem to solve from the parsed base
+(a copy with those facts and goal atoms changed) instead of parsing PDDL again,
+which costs up to ~1.5 s on large problems. The PDDL text is only sent when the
+worker has not seen the key yet (the client mirrors each worker's cache, and a
+worker that does not know the key answers ``missing-base``, upon which the text
+is sent within the same deadline).
+
+**The first parse overlaps the client's.** :meth:`WorkerPool.prime` hands a
+problem's text to an idle worker without waiting (``load_task(..., prime=pool)``
+does it before parsing the same text itself), so the worker parses while this
+process parses, on the other core, and the first solve finds the parse ready.
+"""
+
+from __future__ import annotations
+
+import atexit
+import contextlib
+import json
+import os
+import queue
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from collections import OrderedDict
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from typing import IO, Any
+
+from plan_bridge.errors import WorkerError
+from plan_bridge.pddl.source import ProblemText
+
+__all__ = ["ProblemText", "SolveReply", "Worker", "WorkerPool", "default_pool", "serve"]
+
+STARTUP_TIMEOUT_S = 60.0
+_KILL_GRACE_S = 0.2
+#: Parsed problems a worker keeps (least recently used ones are dropped).
+BASE_CACHE_SIZE = 8
+
+
+@dataclass(frozen=True)
+class SolveReply:
+    """What a worker answered (or what happened to it)."""
+
+    outcome: str
+    """``"result"`` (engine returned), ``"error"`` (engine raised), ``"timeout"``
+    (killed at the deadline) or ``"crashed"`` (worker died)."""
+    status: str = ""
+    """The UP ``PlanGenerationResultStatus`` name, for ``"result"``."""
+    plan: tuple[tuple[str, tuple[str, ...]], ...] = ()
+    message: str = ""
+    error_type: str = ""
+    warnings: tuple[str, ...] = ()
+    log: str = ""
+    engine_time_s: float = 0.0
+    parse_time_s: float = 0.0
+    """Time the worker spent parsing PDDL for this solve (0 when it reused a parse)."""
+    reused: bool = False
+    """True when the worker derived the problem from a base it had parsed before."""
+
+
+class Worker:
+    """One worker process (used by one solve at a time)."""
+
+    def __init__(self) -> None:
+        # Kept open for the worker's lifetime (closed in kill()): its tail explains crashes.
+        self._stderr = tempfile.TemporaryFile(prefix="plan-bridge-worker-")  # noqa: SIM115
+        # The worker must import this very plan_bridge, even from a source checkout
+        # that is not installed; an installed package's root is already on sys.path.
+        package_root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+        bootstrap = (
+            f"import sys; root = {package_root!r}\n"
+            "if root not in sys.path: sys.path.insert(0, root)\n"
+            "from plan_bridge.planning.worker import _main; _main()"
+        )
+        self.process = subprocess.Popen(
+            [sys.executable, "-c", bootstrap],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=self._stderr,
+            start_new_session=True,
+            text=True,
+            encoding="utf-8",
+        )
+        self._replies: queue.Queue[dict[str, Any] | None] = queue.Queue()
+        self._ready = threading.Event()
+        self._reader = threading.Thread(
+            target=self._read_replies, name=f"plan-bridge-worker-{self.process.pid}", daemon=True
+        )
+        self._reader.start()
+        self._next_id = 0
+        # Requests are written whole, one at a time (a prime writes from its own thread).
+        self._write_lock = threading.Lock()
+        # Mirror of the worker's cache of parsed problems (same size and order).
+        self._bases: OrderedDict[str, None] = OrderedDict()
+
+    @property
+    def pid(self) -> int:
+        return self.process.pid
+
+    def is_alive(self) -> bool:
+        return self.process.poll() is None
+
+    def _read_replies(self) -> None:
+        stdout = self.process.stdout
+        assert stdout is not None
+        for line in stdout:
+            try:
+                message = json.loads(line)
+            except ValueError:
+                continue
+            if message.get("ready"):
+                self._ready.set()
+            else:
+                self._replies.put(message)
+        self._ready.set()
+        self._replies.put(None)
+
+    def is_ready(self) -> bool:
+        """Whether the worker has started (imported unified-planning) and serves."""
+        return self._ready.is_set() and self.is_alive()
+
+    def wait_ready(self, timeout: float = STARTUP_TIMEOUT_S) -> None:
+        if not self._ready.wait(timeout) or not self.is_alive():
+            detail = self.stderr_tail()
+            self.kill()
+            raise WorkerError(
+                "the planner worker process did not start"
+                + (f": {detail}" if detail else f" within {timeout:.0f} s")
+            )
+
+    def knows(self, key: str) -> bool:
+        """Whether this worker (probably) holds the parse of base problem ``key``."""
+        return key in self._bases
+
+    def prime(self, base: ProblemText) -> None:
+        """Have the worker parse ``base`` into its cache; returns at once.
+
+        The request is written from a short-lived thread: the worker reads its
+        input only once unified-planning is imported, and a large problem's text
+        does not fit in the pipe's buffer. The reply (``parsed`` or an error) is
+        skipped by the next exchange; if the parse failed, the next solve gets
+        ``missing-base`` and sends the text again.
+        """
+        self._next_id += 1
+        line = json.dumps(
+            {
+                "op": "parse",
+                "id": self._next_id,
+                "base": base.key,
+                "domain": base.domain,
+                "problem": base.problem,
+            }
+        )
+        self._remember(base.key)
+        # Take the lock before the thread starts, so that a request sent after this
+        # call is written after the parse request.
+        self._write_lock.acquire()
+        threading.Thread(
+            target=self._write_and_release, args=(line,), name="plan-bridge-prime", daemon=True
+        ).start()
+
+    def _write_and_release(self, line: str) -> None:
+        try:
+            stdin = self.process.stdin
+            assert stdin is not None
+            with contextlib.suppress(OSError, ValueError):
+                stdin.write(line + "\n")
+                stdin.flush()
+        finally:
+            self._write_lock.release()
+
+    def solve(
+        self,
+        engine: str,
+        base: ProblemText,
+        timeout: float,
+        *,
+        init: Iterable[Sequence[str]] | None = None,
+        goal: Iterable[Sequence[str]] | None = None,
+        engine_timeout: bool = True,
+    ) -> SolveReply:
+        """Solve ``base`` (with ``init`` as its true initial facts and ``goal`` as its
+        goal conjunction, when given); kill the worker if it does not answer within
+        ``timeout``."""
+        self.wait_ready()
+        workdir = tempfile.mkdtemp(prefix="plan-bridge-solve-")
+        request: dict[str, Any] = {
+            "engine": engine,
+            "base": base.key,
+            "init": None if init is None else [list(fact) for fact in init],
+            "goal": None if goal is None else [list(atom) for atom in goal],
+            # The engine's own limit is a courtesy (Fast Downward then stops cleanly
+            # and reports TIMEOUT); the kill below is what makes the limit hard.
+            "timeout": timeout if engine_timeout else None,
+            "workdir": workdir,
+        }
+        started = time.monotonic()
+        deadline = started + timeout + _KILL_GRACE_S
+        try:
+            send_text = base.key not in self._bases
+            while True:
+                if send_text:
+                    request.update(domain=base.domain, problem=base.problem)
+                reply = self._exchange(request, deadline, timeout, started)
+                if isinstance(reply, SolveReply):
+                    self._bases.pop(base.key, None)
+                    return reply
+                if reply.get("outcome") == "missing-base" and not send_text:
+                    # Our mirror of its cache was wrong: send the text after all.
+                    self._bases.pop(base.key, None)
+                    send_text = True
+                    continue
+                break
+            self._remember(base.key)
+            return SolveReply(
+                outcome=str(reply["outcome"]),
+                status=str(reply.get("status", "")),
+                plan=tuple(
+                    (str(name), tuple(str(a) for a in args)) for name, args in reply.get("plan", [])
+                ),
+                message=str(reply.get("message", "")),
+                error_type=str(reply.get("error_type", "")),
+                warnings=tuple(str(w) for w in reply.get("warnings", [])),
+                log=str(reply.get("log", "")),
+                engine_time_s=float(reply.get("engine_time_s", 0.0)),
+                parse_time_s=float(reply.get("parse_time_s", 0.0)),
+                reused=bool(reply.get("reused", False)),
+            )
+        finally:
+            shutil.rmtree(workdir, ignore_errors=True)
+
+    def _remember(self, key: str) -> None:
+        self._bases[key] = None
+        self._bases.move_to_end(key)
+        while len(self._bases) > BASE_CACHE_SIZE:
+            self._bases.popitem(last=False)
+
+    def _exchange(
+        self, request: dict[str, Any], deadline: float, timeout: float, started: float
+    ) -> dict[str, Any] | SolveReply:
+        """Send one request and wait for its reply until ``deadline``."""
+        self._next_id += 1
+        request_id = request["id"] = self._next_id
+        stdin = self.process.stdin
+        assert stdin is not None
+        line = json.dumps(request) + "\n"
+        if not self._write_lock.acquire(timeout=max(0.0, deadline - time.monotonic())):
+            self.kill()
+            return SolveReply(
+                "timeout",
+                message=f"no answer within {timeout:g} s: killed the planner process",
+                engine_time_s=time.monotonic() - started,
+            )
+        try:
+            stdin.write(line)
+            stdin.flush()
+        except (OSError, ValueError):
+            return SolveReply("crashed", message=self._crash_message())
+        finally:
+            self._write_lock.release()
+        while True:
+            try:
+                reply = self._replies.get(timeout=max(0.0, deadline - time.monotonic()))
+            except queue.Empty:
+                self.kill()
+                return SolveReply(
+                    "timeout",
+                    message=f"no answer within {timeout:g} s: killed the planner process",
+                    engine_time_s=time.monotonic() - started,
+                )
+            if reply is None:
+                return SolveReply("crashed", message=self._crash_message())
+            if reply.get("id") == request_id:
+                return reply
+
+    def _crash_message(self) -> str:
+        code = self.process.wait(timeout=5)
+        tail = self.stderr_tail()
+        return f"the planner process died (exit code {code})" + (f": {tail}" if tail else "")
+
+    def stderr_tail(self, limit: int = 600) -> str:
+        with contextlib.suppress(OSError, ValueError):
+            self._stderr.seek(0, os.SEEK_END)
+            size = self._stderr.tell()
+            self._stderr.seek(max(0, size - limit))
+            return self._stderr.read().decode("utf-8", "replace").strip()
+        return ""
+
+    def kill(self) -> None:
+        """Kill the worker and every process it started."""
+        if self.process.poll() is None:
+            with contextlib.suppress(ProcessLookupError, PermissionError):
+                os.killpg(self.process.pid, signal.SIGKILL)
+            with contextlib.suppress(ProcessLookupError):
+                self.process.kill()
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            self.process.wait(timeout=5)
+        self._close_pipes()
+
+    def close(self) -> None:
+        """Ask the worker to exit; kill it if it does not."""
+        if self.process.poll() is None:
+            with contextlib.suppress(OSError, ValueError):
+                assert self.process.stdin is not None
+                self.process.stdin.close()
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                self.process.wait(timeout=1.0)
+        self.kill()
+
+    def _close_pipes(self) -> None:
+        for stream in (self.process.stdin, self.process.stdout):
+            with contextlib.suppress(OSError, ValueError):
+                if stream is not None:
+                    stream.close()
+        with contextlib.suppress(OSError, ValueError):
+            self._stderr.close()
+
+
+class WorkerPool:
+    """Warm worker processes shared by all planners of this process.
+
+    A solve borrows an idle worker (or starts one, up to ``max_workers``; beyond
+    that it waits), and gives it back afterwards unless the worker was killed.
+    Thread-safe.
+    """
+
+    def __init__(self, max_workers: int | None = None) -> None:
+        self.max_workers = max_workers or max(2, os.cpu_count() or 2)
+        self._idle: list[Worker] = []
+        self._count = 0
+        self._closed = False
+        self._condition = threading.Condition()
+        self._pid = os.getpid()
+
+    def warm_up(self, count: int = 1) -> None:
+        """Start workers now (without waiting for them) so later solves find one ready."""
+        with self._condition:
+            while len(self._idle) < count and self._count < self.max_workers:
+                self._idle.append(Worker())
+                self._count += 1
+
+    def prime(self, base: ProblemText) -> None:
+        """Start parsing ``base`` in an idle worker (starting one if the pool may),
+        without waiting; later solves of ``base`` prefer that worker. Does nothing
+        when a worker already holds it or every worker is busy."""
+        with self._condition:
+            if self._closed:
+                return
+            self._idle = [w for w in self._idle if w.is_alive() or self._forget(w)]
+            if any(w.knows(base.key) for w in self._idle):
+                return
+            fresh = [w for w in self._idle if not w._bases]
+            if fresh:
+                worker = fresh[-1]
+            elif self._count < self.max_workers:
+                worker = Worker()
+                self._idle.append(worker)
+                self._count += 1
+            elif self._idle:
+                worker = self._idle[-1]
+            else:
+                return
+            worker.prime(base)
+
+    def _forget(self, worker: Worker) -> bool:
+        """Account for a dead idle worker (call with the condition held); False."""
+        self._count -= 1
+        worker.kill()
+        return False
+
+    @contextlib.contextmanager
+    def worker(self, prefer: str | None = None) -> Any:
+        """Borrow a worker; ``prefer``: a base problem key, to get an idle worker that
+        has that problem parsed already (if there is one)."""
+        worker = self._acquire(prefer)
+        try:
+            yield worker
+        finally:
+            self._release(worker)
+
+    def _acquire(self, prefer: str | None = None) -> Worker:
+        with self._condition:
+            while True:
+                if self._closed:
+                    raise WorkerError("the planner worker pool is closed")
+                if prefer is not None:
+                    for index, candidate in enumerate(self._idle):
+                        if candidate.knows(prefer) and candidate.is_alive():
+                            return self._idle.pop(index)
+                while self._idle:
+                    worker = self._idle.pop()
+                    if worker.is_alive():
+                        return worker
+                    self._count -= 1
+                    worker.kill()
+                if self._count < self.max_workers:
+                    self._count += 1
+                    break
+                self._condition.wait()
+        try:
+            return Worker()
+        except Exception:
+            with self._condition:
+                self._count -= 1
+                self._condition.notify()
+            raise
+
+    def _release(self, worker: Worker) -> None:
+        with self._condition:
+            if worker.is_alive() and not self._closed:
+                self._idle.append(worker)
+            else:
+                self._count -= 1
+                worker.kill()
+            self._condition.notify()
+
+    def close(self) -> None:
+        """Stop every idle worker; workers in use stop when returned."""
+        with self._condition:
+            self._closed = True
+            idle, self._idle = self._idle, []
+            self._count -= len(idle)
+            self._condition.notify_all()
+        if os.getpid() != self._pid:
+            return  # inherited through fork: the workers belong to the parent
+        for worker in idle:
+            if worker.is_ready():
+                worker.close()
+            else:
+                # Still importing unified-planning (it reads no input before that):
+                # waiting for it to see the closed input would delay our exit.
+                worker.kill()
+
+
+_pool: WorkerPool | None = None
+_pool_lock = threading.Lock()
+
+
+def default_pool() -> WorkerPool:
+    """The process-wide pool (created on first use, closed at exit)."""
+    global _pool
+    with _pool_lock:
+        if _pool is None or _pool._pid != os.getpid():
+            _pool = WorkerPool()
+        return _pool
+
+
+def _close_default_pool() -> None:
+    if _pool is not None and _pool._pid == os.getpid():
+        _pool.close()
+
+
+def _forget_pool_after_fork() -> None:
+    # A forked child must not talk to its parent's workers.
+    global _pool, _pool_lock
+    _pool = None
+    _pool_lock = threading.Lock()
+
+
+atexit.register(_close_default_pool)
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_forget_pool_after_fork)
+
+
+# -- worker side -------------------------------------------------------------------
+
+
+def serve(requests: IO[str], replies: IO[str]) -> None:
+    """Answer solve requests (one JSON object per line) until stdin closes."""
+    from plan_bridge.pddl.up_runtime import ensure_unified_planning
+
+    ensure_unified_planning()
+    from unified_planning.io import PDDLReader  # type: ignore[import-untyped]
+
+    # Build the grammar once: constructing a PDDLReader costs ~50 ms.
+    reader = PDDLReader()
+    home = os.getcwd()
+    replies.write(json.dumps({"ready": True, "pid": os.getpid()}) + "\n")
+    replies.flush()
+    for line in requests:
+        if not line.strip():
+            continue
+        request = json.loads(line)
+        if request.get("op") == "parse":
+            reply = _parse_request(reader, request)
+            reply["id"] = request["id"]
+            replies.write(json.dumps(reply) + "\n")
+            replies.flush()
+            continue
+        try:
+            os.chdir(request["workdir"])
+            reply = _solve_request(reader, request)
+        except Exception as exc:
+            reply = {"outcome": "error", "error_type": type(exc).__name__, "message": str(exc)}
+        finally:
+            os.chdir(home)
+        reply["id"] = request["id"]
+        replies.write(json.dumps(reply) + "\n")
+        replies.flush()
+
+
+class _Base:
+    """A parsed base problem and what deriving problems from it needs."""
+
+    def __init__(self, problem: Any) -> None:
+        from plan_bridge.pddl.up_runtime import lean_copy
+
+        self.problem = lean_copy(problem)
+        self.kind = self.problem.kind
+        # Fact -> fluent expression of the atoms true in the base's initial state.
+        self.true_atoms: dict[tuple[str, ...], Any] = {
+            _atom_of(fluent_exp): fluent_exp
+            for fluent_exp, value in self.problem.explicit_initial_values.items()
+            if fluent_exp.type.is_bool_type() and value.is_bool_constant() and value.is_true()
+        }
+        self.goal_atoms = _conjunctive_goal(self.problem.goals)
+
+    def derive(self, init: list[list[str]] | None, goal: list[list[str]] | None) -> Any:
+        """The problem to solve: the base with ``init`` true (all other boolean atoms
+        false) and ``goal`` as its goal; the base itself when neither changes it."""
+        new_init = None if init is None else {tuple(atom) for atom in init}
+        new_goal = None if goal is None else sorted({tuple(atom) for atom in goal})
+        if new_init is not None and new_init == set(self.true_atoms):
+            new_init = None
+        if new_goal is not None and new_goal == self.goal_atoms:
+            new_goal = None
+        if new_init is None and new_goal is None:
+            return self.problem
+        from plan_bridge.pddl.up_runtime import lean_copy
+
+        # Changing boolean initial values and positive goal atoms does not change the
+        # problem kind: keep the base's instead of recomputing it on every replan.
+        problem = lean_copy(self.problem, kind=self.kind)
+        if new_init is not None:
+            for atom, fluent_exp in self.true_atoms.items():
+                if atom not in new_init:
+                    problem.set_initial_value(fluent_exp, False)
+            for atom in new_init:
+                if atom not in self.true_atoms:
+                    problem.set_initial_value(_expression(problem, atom), True)
+        if new_goal is not None:
+            problem.clear_goals()
+            for atom in new_goal:
+                problem.add_goal(_expression(problem, atom))
+        return problem
+
+
+def _atom_of(fluent_exp: Any) -> tuple[str, ...]:
+    return (fluent_exp.fluent().name, *(arg.object().name for arg in fluent_exp.args))
+
+
+def _expression(problem: Any, atom: Sequence[str]) -> Any:
+    return problem.fluent(atom[0])(*(problem.object(name) for name in atom[1:]))
+
+
+def _conjunctive_goal(goals: Iterable[Any]) -> list[tuple[str, ...]] | None:
+    """The goal's atoms, sorted, if it is a conjunction of positive ground atoms."""
+    atoms: list[tuple[str, ...]] = []
+    pending = list(goals)
+    while pending:
+        node = pending.pop()
+        if node.is_and():
+            pending.extend(node.args)
+        elif node.is_fluent_exp() and all(arg.is_object_exp() for arg in node.args):
+            atoms.append(_atom_of(node))
+        elif not node.is_true():
+            return None
+    return sorted(set(atoms))
+
+
+_bases: OrderedDict[str, _Base] = OrderedDict()
+
+
+def _parse_base(reader: Any, request: dict[str, Any]) -> float:
+    """Parse the request's text into the cache under its key: the time it took."""
+    import warnings
+
+    started = time.monotonic()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the client reported them when it loaded the task
+        base = _Base(reader.parse_problem_string(request["domain"], request["problem"]))
+    _bases[request["base"]] = base
+    while len(_bases) > BASE_CACHE_SIZE:
+        _bases.popitem(last=False)
+    return time.monotonic() - started
+
+
+def _parse_request(reader: Any, request: dict[str, Any]) -> dict[str, Any]:
+    if request["base"] in _bases:
+        _bases.move_to_end(request["base"])
+        return {"outcome": "parsed", "parse_time_s": 0.0}
+    try:
+        return {"outcome": "parsed", "parse_time_s": _parse_base(reader, request)}
+    except Exception as exc:
+        # The client parses the same text and reports the error properly.
+        return {"outcome": "error", "error_type": type(exc).__name__, "message": str(exc)}
+
+
+def _solve_request(reader: Any, request: dict[str, Any]) -> dict[str, Any]:
+    import warnings
+
+    from unified_planning.shortcuts import OneshotPlanner  # type: ignore[import-untyped]
+
+    key = request["base"]
+    reused = key in _bases
+    parse_time = 0.0
+    if not reused:
+        if request.get("domain") is None or request.get("problem") is None:
+            return {"outcome": "missing-base"}
+        parse_time = _parse_base(reader, request)
+    base = _bases[key]
+    _bases.move_to_end(key)
+    started = time.monotonic()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            problem = base.derive(request.get("init"), request.get("goal"))
+            with OneshotPlanner(name=request["engine"]) as planner:
+                result = planner.solve(problem, timeout=request["timeout"])
+        except Exception as exc:
+            return {
+                "outcome": "error",
+                "error_type": type(exc).__name__,
+                "message": str(exc),
+                "warnings": [str(w.message) for w in caught],
+                "engine_time_s": time.monotonic() - started,
+                "parse_time_s": parse_time,
+            }
+    plan = []
+    if result.plan is not None:
+        plan = [
+            [instance.action.name, [arg.object().name for arg in instance.actual_parameters]]
+            for instance in result.plan.actions
+        ]
+    log = "\n".join(m.message for m in (result.log_messages or []) if m.message.strip())
+    return {
+        "outcome": "result",
+        "status": result.status.name,
+        "plan": plan,
+        "warnings": [str(w.message) for w in caught],
+        "log": log[-4000:],
+        "engine_time_s": time.monotonic() - started,
+        "parse_time_s": parse_time,
+        "reused": reused,
+    }
+
+
+def _main() -> None:
+    # Our replies own the real stdout; anything an engine prints goes to stderr.
+    replies = os.fdopen(os.dup(sys.stdout.fileno()), "w", encoding="utf-8")
+    os.dup2(sys.stderr.fileno(), sys.stdout.fileno())
+    serve(sys.stdin, replies)
+
+
+if __name__ == "__main__":
+    _main()

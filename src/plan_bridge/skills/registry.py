@@ -1,0 +1,199 @@
+"""Skills: the hand-written SMACH behaviour behind each PDDL action.
+
+A skill registry maps action names to factories. A factory takes the action's
+arguments (object names, in PDDL parameter order) and returns a ``smach.State``,
+typically a StateMachine. The state must have the outcomes ``succeeded``,
+``aborted`` and ``preempted``; other outcomes are allowed when mapped to one of those
+with ``outcome_map``. A skill can read the keys ``action``, ``arguments`` and
+``params`` (parameter name -> object) and may write ``observations``, a mapping
+{fact: True/False} or a list of (fact, bool) pairs, to report what it saw::
+
+    skills = SkillRegistry()
+
+    @skills.register("pick")
+    def pick(obj: str, place: str) -> smach.State:
+        sm = smach.StateMachine(outcomes=["succeeded", "aborted", "preempted"])
+        ...
+        return sm
+"""
+
+from __future__ import annotations
+
+import inspect
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import smach
+from plan_bridge.errors import PlanBridgeError
+
+if TYPE_CHECKING:
+    from plan_bridge.pddl.task import PlanningTask
+    from plan_bridge.planning.planner import PlanStep
+
+__all__ = ["REQUIRED_OUTCOMES", "STEP_KEYS", "Skill", "SkillError", "SkillRegistry"]
+
+REQUIRED_OUTCOMES = ("succeeded", "aborted", "preempted")
+#: Keys the executive provides to every skill.
+STEP_KEYS = ("action", "arguments", "params")
+#: The key a skill writes to report observations.
+OBSERVATIONS_KEY = "observations"
+
+SkillFactory = Callable[..., smach.State]
+
+
+class SkillError(PlanBridgeError):
+    """A skill is missing, has the wrong arity, or has unmapped outcomes."""
+
+
+@dataclass(frozen=True)
+class Skill:
+    """A registered factory and how its outcomes map to the executive's three."""
+
+    action: str
+    factory: SkillFactory
+    outcome_map: Mapping[str, str] = field(default_factory=dict)
+
+    def map_outcome(self, outcome: str) -> str:
+        return self.outcome_map.get(outcome, outcome)
+
+    def arity_problem(self, arity: int) -> str | None:
+        """Why the factory cannot take ``arity`` positional arguments, or None."""
+        try:
+            signature = inspect.signature(self.factory)
+        except (TypeError, ValueError):
+            return None
+        try:
+            signature.bind(*(["x"] * arity))
+        except TypeError as exc:
+            return f"its factory {self.factory.__qualname__}{signature} cannot take {arity} argument(s): {exc}"
+        return None
+
+    def outcome_problems(self, state: smach.State) -> list[str]:
+        outcomes = state.get_registered_outcomes()
+        problems = []
+        for required in REQUIRED_OUTCOMES:
+            if required not in outcomes and required not in self.outcome_map.values():
+                problems.append(f"it has no outcome {required!r} (outcomes: {', '.join(outcomes)})")
+        for outcome in outcomes:
+            mapped = self.map_outcome(outcome)
+            if mapped not in REQUIRED_OUTCOMES:
+                problems.append(
+                    f"its outcome {outcome!r} is not one of {', '.join(REQUIRED_OUTCOMES)}; "
+                    f"map it with outcome_map={{{outcome!r}: 'aborted'}} (or another of them)"
+                )
+        for source, target in self.outcome_map.items():
+            if source not in outcomes:
+                problems.append(f"outcome_map names {source!r}, which is not an outcome of it")
+            if target not in REQUIRED_OUTCOMES:
+                problems.append(
+                    f"outcome_map sends {source!r} to {target!r}, not to one of {REQUIRED_OUTCOMES}"
+                )
+        return problems
+
+
+class SkillRegistry:
+    """Action name -> :class:`Skill`."""
+
+    def __init__(self, fallback: Callable[[PlanStep], smach.State] | None = None) -> None:
+        self._skills: dict[str, Skill] = {}
+        #: Builds a state for actions without a registered skill (e.g. symbolic skills).
+        self.fallback = fallback
+
+    def register(
+        self, action: str, *, outcome_map: Mapping[str, str] | None = None
+    ) -> Callable[[SkillFactory], SkillFactory]:
+        """Decorator: ``@skills.register("pick")`` on a factory ``f(*args) -> State``."""
+        name = action.lower()
+
+        def decorate(factory: SkillFactory) -> SkillFactory:
+            if name in self._skills:
+                raise SkillError(
+                    f"a skill for action {name!r} is already registered "
+                    f"({self._skills[name].factory.__qualname__})"
+                )
+            if not callable(factory):
+                raise SkillError(f"the skill for {name!r} must be callable, got {factory!r}")
+            self._skills[name] = Skill(name, factory, dict(outcome_map or {}))
+            return factory
+
+        return decorate
+
+    def add(
+        self, action: str, factory: SkillFactory, *, outcome_map: Mapping[str, str] | None = None
+    ) -> None:
+        """Register without a decorator."""
+        self.register(action, outcome_map=outcome_map)(factory)
+
+    def __contains__(self, action: object) -> bool:
+        return isinstance(action, str) and action.lower() in self._skills
+
+    def get(self, action: str) -> Skill | None:
+        return self._skills.get(action.lower())
+
+    @property
+    def actions(self) -> list[str]:
+        return sorted(self._skills)
+
+    def create(self, step: PlanStep) -> tuple[smach.State, Skill | None]:
+        """Build the state for one plan step (and the skill it came from, if any)."""
+        skill = self._skills.get(step.action)
+        if skill is None:
+            if self.fallback is None:
+                raise SkillError(
+                    f"no skill for action {step.action!r} (step {step}); registered skills: "
+                    f"{', '.join(self.actions) or 'none'}"
+                )
+            return self.fallback(step), None
+        try:
+            state = skill.factory(*step.arguments)
+        except Exception as exc:
+            raise SkillError(
+                f"the skill factory for {step} ({skill.factory.__qualname__}) raised "
+                f"{type(exc).__name__}: {exc}"
+            ) from exc
+        if not isinstance(state, smach.State):
+            raise SkillError(
+                f"the skill factory for {step} returned {type(state).__name__}, not a smach.State"
+            )
+        return state, skill
+
+    def check(self, task: PlanningTask) -> list[str]:
+        """Every problem binding this registry to ``task``'s actions, one line each.
+
+        Each skill is built once with example arguments (objects of the right types)
+        to check its outcomes, so factories should only construct states.
+        """
+        from plan_bridge.planning.planner import PlanStep
+
+        problems: list[str] = []
+        for name in sorted(self._skills):
+            if name not in task.actions:
+                problems.append(
+                    f"skill {name!r}: the domain has no action {name!r}; actions: "
+                    f"{', '.join(sorted(task.actions))}"
+                )
+        for name, schema in sorted(task.actions.items()):
+            skill = self._skills.get(name)
+            if skill is None:
+                if self.fallback is None:
+                    problems.append(
+                        f"action {name!r}: no skill registered (and no fallback such as "
+                        f"symbolic skills)"
+                    )
+                continue
+            arity = skill.arity_problem(schema.arity)
+            if arity:
+                problems.append(f"skill {name!r}: {arity}")
+                continue
+            example = []
+            for parameter in schema.parameters:
+                candidates = task.objects_of_type(parameter.type)
+                example.append(candidates[0] if candidates else parameter.name)
+            try:
+                state, _ = self.create(PlanStep(name, tuple(example)))
+            except SkillError as exc:
+                problems.append(f"skill {name!r}: {exc}")
+                continue
+            problems.extend(f"skill {name!r}: {p}" for p in skill.outcome_problems(state))
+        return problems

@@ -1,0 +1,389 @@
+"""The scripted-vs-planned study: run missions under approaches, fault rates and seeds.
+
+``plan-bridge study TARGET... --runs N --fault-rates 0,0.1,0.2,0.4 --out DIR`` runs
+every (target, approach, fault rate, seed) in worker processes, appends one row per
+finished run to ``DIR/results.csv`` (flushed and synced: a killed study continues
+where it stopped, and a run is never counted twice), then writes ``summary.csv``,
+``authoring.csv``, PNG plots and ``report.md``.
+
+Approaches: ``scripted`` (the domain's hand-written baseline), ``planned`` (the
+executive with the full recovery policy), the ablations ``no-replan``,
+``retry-only`` and ``replan-only``, and ``pyperplan`` (full policy, other planner).
+"""
+
+from __future__ import annotations
+
+import csv
+import multiprocessing
+import os
+import queue
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+__all__ = [
+    "APPROACHES",
+    "DEFAULT_APPROACHES",
+    "FIELDS",
+    "RunSpec",
+    "read_results",
+    "run_one",
+    "run_study",
+]
+
+APPROACHES: dict[str, tuple[str, str]] = {
+    # name: (policy, planner); "scripted" has no planner.
+    "scripted": ("", ""),
+    "planned": ("full", "fast-downward"),
+    "no-replan": ("no-replan", "fast-downward"),
+    "retry-only": ("retry-only", "fast-downward"),
+    "replan-only": ("replan-only", "fast-downward"),
+    "pyperplan": ("full", "pyperplan"),
+}
+DEFAULT_APPROACHES = ("scripted", "planned", "no-replan", "retry-only", "replan-only")
+
+FIELDS = [
+    "target",
+    "problem",
+    "variant",
+    "approach",
+    "fault_rate",
+    "seed",
+    "outcome",
+    "goal_reached",
+    "wall_time_s",
+    "sim_time_s",
+    "steps",
+    "actions_executed",
+    "actions_failed",
+    "faults_injected",
+    "retries",
+    "continues",
+    "repairs",
+    "replans",
+    "planner_calls",
+    "planning_time_s",
+    "absorbed_skill",
+    "absorbed_retry",
+    "absorbed_continue",
+    "absorbed_repair",
+    "absorbed_replan",
+    "error",
+]
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """One run of the study."""
+
+    target: str
+    approach: str
+    fault_rate: float
+    seed: int
+    problem: str = ""
+    variant: str = ""
+
+    @property
+    def key(self) -> tuple[str, str, str, str, str, str]:
+        return (
+            Path(self.target).name,
+            self.problem,
+            self.variant,
+            self.approach,
+            f"{self.fault_rate:g}",
+            str(self.seed),
+        )
+
+
+def _row_key(row: dict[str, str]) -> tuple[str, str, str, str, str, str]:
+    return (
+        row["target"],
+        row["problem"],
+        row["variant"],
+        row["approach"],
+        f"{float(row['fault_rate']):g}",
+        row["seed"],
+    )
+
+
+# -- one run (in a worker process) ---------------------------------------------------------
+_targets: dict[tuple[str, str], Any] = {}
+
+
+def target_of(path: str, problem: str) -> Any:
+    from plan_bridge.missions.mission import load_target
+    from plan_bridge.planning.worker import default_pool
+
+    key = (path, problem)
+    if key not in _targets:
+        _targets[key] = load_target(path, problem or None, prime=default_pool())
+    return _targets[key]
+
+
+def _call_domain(fn: Any, task: Any, spec: RunSpec) -> Any:
+    import inspect
+
+    kwargs: dict[str, Any] = {"seed": spec.seed, "fail_rate": spec.fault_rate}
+    if spec.variant:
+        if "variant" not in inspect.signature(fn).parameters:
+            raise ValueError(f"{spec.target}: {fn.__name__}() does not support variants")
+        kwargs["variant"] = spec.variant
+    return fn(task, **kwargs)
+
+
+def run_one(spec: RunSpec) -> dict[str, Any]:
+    """Run one mission and measure it; never raises (errors become rows)."""
+    row: dict[str, Any] = dict.fromkeys(FIELDS, "")
+    key = spec.key
+    row.update(
+        target=key[0],
+        problem=key[1],
+        variant=key[2],
+        approach=key[3],
+        fault_rate=key[4],
+        seed=key[5],
+    )
+    clock: list[float] = []
+    try:
+        row.update(_run(spec, clock))
+    except Exception as exc:
+        row.update(outcome="error", goal_reached=False, error=f"{type(exc).__name__}: {exc}"[:300])
+    # Wall time of the mission itself: loading the target is shared by all runs.
+    row["wall_time_s"] = round(time.monotonic() - clock[0], 4) if clock else 0.0
+    return row
+
+
+def _count_steps(events: list[Any]) -> int:
+    return sum(1 for e in events if e.kind == "state_exited")
+
+
+def _run(spec: RunSpec, clock: list[float]) -> dict[str, Any]:
+    from plan_bridge.execution.executive import Executive, ReplanPolicy
+    from plan_bridge.planning.planner import get_planner
+
+    target = target_of(spec.target, spec.problem)
+    task = target.task
+    clock.append(time.monotonic())
+    exits: list[Any] = []
+
+    def count(event: Any) -> None:
+        if event.kind == "state_exited":
+            exits.append(event)
+
+    if spec.approach == "scripted":
+        scripted = getattr(target.module, "scripted", None)
+        if scripted is None:
+            raise ValueError(f"{target.name} has no scripted baseline")
+        mission = _call_domain(scripted, task, spec)
+        machine = mission.machine
+        if hasattr(machine, "add_listener"):
+            machine.add_listener(count)
+        outcome = machine.execute()
+        world = mission.world
+        faults = getattr(world, "faults_injected", 0)
+        reached = bool(world.goal_reached())
+        return {
+            "outcome": outcome,
+            "goal_reached": reached,
+            "sim_time_s": round(getattr(world, "sim_time", 0.0), 3),
+            "steps": _count_steps(exits),
+            "actions_executed": getattr(world, "actions_run", ""),
+            "faults_injected": faults,
+        }
+    policy_name, planner_name = APPROACHES[spec.approach]
+    if target.module is not None and hasattr(target.module, "setup"):
+        setup = _call_domain(target.module.setup, task, spec)
+    else:
+        setup = target.setup(seed=spec.seed, fail_rate=spec.fault_rate)
+    executive = Executive(
+        task,
+        setup.skills,
+        get_planner(planner_name),
+        policy=ReplanPolicy.named(policy_name),
+        sense=setup.sense,
+        concurrent=setup.concurrent,
+    )
+    executive.add_listener(count)
+    outcome = executive.execute()
+    report = executive.report
+    world = setup.world
+    faults = getattr(world, "faults_injected", 0)
+    decisions = [d["decision"] for d in report.decisions]
+    failed = report.actions_failed
+    return {
+        "outcome": outcome,
+        "goal_reached": bool(world.goal_reached()) if world is not None else report.goal_reached,
+        "sim_time_s": round(getattr(world, "sim_time", 0.0), 3),
+        "steps": _count_steps(exits),
+        "actions_executed": report.actions_executed,
+        "actions_failed": failed,
+        "faults_injected": faults,
+        "retries": report.retries,
+        "continues": report.continues,
+        "repairs": report.repairs,
+        "replans": report.replans,
+        "planner_calls": report.planner_calls,
+        "planning_time_s": round(report.planning_time_s, 4),
+        # Faults that never surfaced as a failed step were absorbed inside the skills
+        # (local retries, re-detections); the others by the executive's decisions.
+        "absorbed_skill": max(0, faults - failed),
+        "absorbed_retry": decisions.count("retry"),
+        "absorbed_continue": decisions.count("continue"),
+        "absorbed_repair": decisions.count("repair"),
+        "absorbed_replan": decisions.count("replan"),
+    }
+
+
+# -- the worker pool ----------------------------------------------------------------------------
+def _worker(tasks: Any, results: Any) -> None:
+    os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    from plan_bridge.planning.planner import get_planner
+
+    # Start the planner's worker process now, so the first run is not charged for it.
+    get_planner("fast-downward").warm_up()
+    while True:
+        item = tasks.get()
+        if item is None:
+            return
+        index, spec = item
+        results.put((index, run_one(spec)))
+
+
+@dataclass
+class _Worker:
+    process: Any
+    tasks: Any
+    current: tuple[int, RunSpec] | None = None
+    since: float = 0.0
+
+
+class _Pool:
+    """Worker processes with a per-run time limit: a stuck run is killed, not waited for."""
+
+    def __init__(self, jobs: int) -> None:
+        self.ctx = multiprocessing.get_context("spawn")
+        self.results: Any = self.ctx.Queue()
+        self.workers = [self._start() for _ in range(jobs)]
+
+    def _start(self) -> _Worker:
+        tasks = self.ctx.Queue()
+        process = self.ctx.Process(target=_worker, args=(tasks, self.results), daemon=True)
+        process.start()
+        return _Worker(process, tasks)
+
+    def run(self, specs: list[RunSpec], run_timeout: float, on_result: Any) -> None:
+        pending = list(enumerate(specs))[::-1]
+        while pending or any(w.current is not None for w in self.workers):
+            for worker in self.workers:
+                if worker.current is None and pending:
+                    worker.current = pending.pop()
+                    worker.since = time.monotonic()
+                    worker.tasks.put(worker.current)
+            try:
+                index, row = self.results.get(timeout=0.5)
+            except queue.Empty:
+                pass
+            else:
+                for worker in self.workers:
+                    if worker.current is not None and worker.current[0] == index:
+                        worker.current = None
+                on_result(specs[index], row)
+            self._reap(run_timeout, on_result)
+
+    def _reap(self, run_timeout: float, on_result: Any) -> None:
+        """Replace workers that died or overran their run, recording that run."""
+        now = time.monotonic()
+        for n, worker in enumerate(self.workers):
+            if worker.current is None:
+                continue
+            overran = now - worker.since > run_timeout
+            if worker.process.is_alive() and not overran:
+                continue
+            worker.process.kill()
+            worker.process.join(5)
+            spec = worker.current[1]
+            row: dict[str, Any] = dict.fromkeys(FIELDS, "")
+            row.update(
+                zip(
+                    ("target", "problem", "variant", "approach", "fault_rate", "seed"),
+                    spec.key,
+                    strict=True,
+                )
+            )
+            row.update(
+                outcome="timeout" if overran else "crashed",
+                goal_reached=False,
+                wall_time_s=round(now - worker.since, 3),
+                error=f"run exceeded {run_timeout:g} s"
+                if overran
+                else f"worker died (exit {worker.process.exitcode})",
+            )
+            self.workers[n] = self._start()
+            on_result(spec, row)
+
+    def close(self) -> None:
+        for worker in self.workers:
+            worker.tasks.put(None)
+        for worker in self.workers:
+            worker.process.join(5)
+            if worker.process.is_alive():
+                worker.process.kill()
+
+
+# -- the study ------------------------------------------------------------------------------------
+def read_results(path: Path) -> list[dict[str, str]]:
+    if not path.exists():
+        return []
+    with path.open(newline="", encoding="utf-8") as f:
+        return [row for row in csv.DictReader(f) if row.get("outcome")]
+
+
+def run_study(
+    specs: Sequence[RunSpec],
+    out: Path,
+    *,
+    jobs: int = 2,
+    run_timeout: float = 300.0,
+    progress: Any = None,
+) -> list[dict[str, str]]:
+    """Run what ``results.csv`` in ``out`` does not have yet; return every requested row."""
+    from smach.introspection.journal import drop_torn_line
+
+    out.mkdir(parents=True, exist_ok=True)
+    results_path = out / "results.csv"
+    drop_torn_line(results_path)
+    existing = read_results(results_path)
+    done = {_row_key(r) for r in existing}
+    todo = [s for s in specs if s.key not in done]
+    new_file = not results_path.exists() or results_path.stat().st_size == 0
+    started = time.monotonic()
+    finished = 0
+    with results_path.open("a", newline="", encoding="utf-8") as f:
+        writer = csv.DictWriter(f, fieldnames=FIELDS)
+        if new_file:
+            writer.writeheader()
+
+        def on_result(spec: RunSpec, row: dict[str, Any]) -> None:
+            nonlocal finished
+            writer.writerow(row)
+            f.flush()
+            os.fsync(f.fileno())
+            finished += 1
+            if progress is not None:
+                progress(finished, len(todo), spec, row, time.monotonic() - started)
+
+        if todo:
+            pool = _Pool(max(1, min(jobs, len(todo))))
+            try:
+                pool.run(todo, run_timeout, on_result)
+            finally:
+                pool.close()
+    wanted = {s.key for s in specs}
+    rows = [r for r in read_results(results_path) if _row_key(r) in wanted]
+    # A resumed study may hold a row twice if a crash hit between write and fsync: keep one.
+    unique: dict[tuple[str, ...], dict[str, str]] = {}
+    for row in rows:
+        unique.setdefault(_row_key(row), row)
+    return list(unique.values())

@@ -1,0 +1,113 @@
+"""Crash and resume: SIGKILL a journaled run at many points, resume it, lose nothing."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from smach.introspection.journal import read_journal
+
+ROOMS = Path(__file__).parents[1] / "data" / "rooms"
+
+
+def _cli(*args: str) -> list[str]:
+    return [sys.executable, "-m", "plan_bridge", *args]
+
+
+def _kill_after_lines(journal: Path, lines: int, seed: int) -> bool:
+    """Start a journaled run and SIGKILL it once the journal has ``lines`` lines.
+
+    Returns False if the run finished before that.
+    """
+    process = subprocess.Popen(
+        _cli(
+            "run",
+            str(ROOMS),
+            "--fail-rate",
+            "0.3",
+            "--seed",
+            str(seed),
+            "--journal",
+            str(journal),
+            "--quiet",
+        ),
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    deadline = time.monotonic() + 60
+    while process.poll() is None and time.monotonic() < deadline:
+        if journal.exists() and journal.read_bytes().count(b"\n") >= lines:
+            os.kill(process.pid, signal.SIGKILL)
+            break
+        time.sleep(0.002)
+    process.wait(30)
+    return process.returncode == -signal.SIGKILL
+
+
+@pytest.mark.timeout(600)
+@pytest.mark.parametrize("lines", [2, 6, 12, 20, 30, 45, 60])
+def test_a_run_killed_at_any_point_resumes_to_the_goal_without_redoing_finished_steps(
+    tmp_path: Path, lines: int
+) -> None:
+    journal = tmp_path / "run.jsonl"
+    if not _kill_after_lines(journal, lines, seed=4):
+        pytest.skip("the run finished before the kill point")
+    header, before = read_journal(journal)
+    checkpoints = [r for r in before if r["kind"] == "checkpoint"]
+    done_before = len(checkpoints[-1]["state"]["report"]["executed"]) if checkpoints else 0
+    first_after = checkpoints[-1]["state"]["first_index"] if checkpoints else 1
+
+    result = subprocess.run(
+        _cli("run", "--resume", str(journal), "--quiet"),
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert result.returncode == 0, result.stderr
+
+    header_after, records = read_journal(journal)
+    assert header_after == header  # one journal, appended to
+    resumed_at = max(i for i, r in enumerate(records) if r["kind"] == "resumed")
+    after = records[resumed_at:]
+    finished_after = [
+        r for r in after if r["kind"] == "step_finished" and r["outcome"] == "succeeded"
+    ]
+    # Steps that were done (checkpointed) are never run again: numbering continues.
+    assert all(r["index"] >= first_after for r in finished_after)
+    summary = records[-1]
+    assert summary["kind"] == "summary" and summary["goal_reached"] is True
+    assert len(summary["executed"]) == done_before + len(finished_after)
+
+
+def test_resume_refuses_a_finished_run_and_a_foreign_file(tmp_path: Path) -> None:
+    journal = tmp_path / "done.jsonl"
+    done = subprocess.run(
+        _cli("run", str(ROOMS), "--journal", str(journal), "--quiet"),
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert done.returncode == 0, done.stderr
+    again = subprocess.run(
+        _cli("run", "--resume", str(journal)), capture_output=True, text=True, timeout=60
+    )
+    assert again.returncode == 2 and "already finished" in again.stderr
+    foreign = tmp_path / "foreign.jsonl"
+    foreign.write_text('{"kind": "header"}\n')
+    refused = subprocess.run(
+        _cli("run", "--resume", str(foreign)), capture_output=True, text=True, timeout=60
+    )
+    assert refused.returncode == 2 and "not a journal of 'plan-bridge run" in refused.stderr
+    both = subprocess.run(
+        _cli("run", str(ROOMS), "--resume", str(journal)),
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert both.returncode == 2 and "give no TARGET" in both.stderr

@@ -1,0 +1,255 @@
+"""Replanning fast path: workers keep parsed problems and derive replans from them."""
+
+from __future__ import annotations
+
+import os
+import signal
+import warnings
+from pathlib import Path
+
+import pytest
+
+import smach
+from plan_bridge.execution.events import PlanComputed
+from plan_bridge.execution.executive import Executive, ReplanPolicy
+from plan_bridge.execution.simulation import SimulatedWorld, symbolic_skills
+from plan_bridge.pddl.task import PlanningTask, load_task, task_from_problem
+from plan_bridge.pddl.up_runtime import lean_copy
+from plan_bridge.planning.planner import PlanResult, PlanStatus, PlanStep, UPPlanner
+from plan_bridge.planning.worker import ProblemText, WorkerPool
+
+
+def _assert_valid_plan(task: PlanningTask, result: PlanResult) -> None:
+    from unified_planning.shortcuts import PlanValidator
+
+    assert result.status is PlanStatus.SOLVED, result.explanation
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="We cannot establish whether")
+        warnings.filterwarnings("ignore", message="The Grounder used in the")
+        with PlanValidator(name="sequential_plan_validator") as validator:
+            verdict = validator.validate(task.problem, task.up_plan(result.actions))
+    assert verdict.status.name == "VALID", verdict
+
+
+@pytest.fixture
+def pool() -> WorkerPool:  # type: ignore[misc]
+    pool = WorkerPool(max_workers=1)
+    yield pool
+    pool.close()
+
+
+def gripper(bench: Path, problem: str = "prob01") -> PlanningTask:
+    return load_task(bench / "gripper" / "domain.pddl", bench / "gripper" / f"{problem}.pddl")
+
+
+def _moved(task: PlanningTask) -> frozenset[tuple[str, ...]]:
+    """The gripper state after three balls were carried to roomb and the robot came back."""
+    facts = {f for f in task.initial_facts if not (f[0] == "at" and f[1] != "ball1")}
+    facts |= {("at", ball, "roomb") for ball in ("ball2", "ball3", "ball4")}
+    return frozenset(facts)
+
+
+@pytest.mark.timeout(60)
+def test_a_replan_from_new_facts_reuses_the_parsed_problem(bench: Path, pool: WorkerPool) -> None:
+    planner = UPPlanner("fast-downward", pool=pool)
+    task = gripper(bench)
+    first = planner.solve(task, timeout=30)
+    assert first.solved and not first.problem_reused
+    replan = planner.solve(task, timeout=30, initial_state=_moved(task))
+    assert replan.problem_reused
+    assert [s.action for s in replan.actions] == ["pick", "move", "drop"]
+    _assert_valid_plan(task.with_initial_state(_moved(task)), replan)
+    # The base problem in the worker is unchanged by the replan.
+    again = planner.solve(task, timeout=30)
+    assert again.problem_reused and len(again.actions) == len(first.actions) == 11
+
+
+@pytest.mark.timeout(60)
+def test_goal_atoms_replace_the_goal_for_one_solve(bench: Path, pool: WorkerPool) -> None:
+    planner = UPPlanner("fast-downward", pool=pool)
+    task = gripper(bench)
+    result = planner.solve(task, timeout=30, goal=["(carry ball1 left)"])
+    assert result.plan_strings() == ["(pick ball1 rooma left)"]
+    both = planner.solve(task, timeout=30, initial_state=_moved(task), goal=["(at-robby roomb)"])
+    assert both.problem_reused and both.plan_strings() == ["(move rooma roomb)"]
+    assert len(planner.solve(task, timeout=30).actions) == 11
+
+
+def test_an_unknown_goal_atom_is_a_fact_error(bench: Path, pool: WorkerPool) -> None:
+    from plan_bridge.errors import FactError
+
+    planner = UPPlanner("fast-downward", pool=pool)
+    with pytest.raises(FactError, match="unknown object 'roomc'"):
+        planner.solve(gripper(bench), timeout=30, goal=["(at-robby roomc)"])
+
+
+@pytest.mark.timeout(60)
+def test_no_plan_explanation_uses_the_replanned_goal(doors, pool: WorkerPool) -> None:  # type: ignore[no-untyped-def]
+    planner = UPPlanner("fast-downward", pool=pool)
+    task = load_task(*doors())
+    assert planner.solve(task, timeout=30).solved
+    # Without the key the vault cannot be opened: named as unreachable.
+    facts = task.initial_facts - {("has", "k1")}
+    result = planner.solve(task, timeout=30, initial_state=facts, goal=["(at vault)"])
+    assert result.status is PlanStatus.UNSOLVABLE
+    assert result.unreachable_goals == (("at", "vault"),)
+
+
+@pytest.mark.timeout(60)
+def test_a_worker_that_does_not_know_the_problem_is_sent_its_text(
+    bench: Path, pool: WorkerPool
+) -> None:
+    planner = UPPlanner("fast-downward", pool=pool)
+    task = gripper(bench)
+    key = ProblemText.of(task.domain_text or "", task.problem_text or "").key
+    planner.warm_up()
+    with pool.worker() as worker:
+        worker._remember(key)  # the client wrongly believes the worker has parsed it
+    result = planner.solve(task, timeout=30, initial_state=_moved(task))
+    assert result.solved and not result.problem_reused
+    assert planner.solve(task, timeout=30, initial_state=_moved(task)).problem_reused
+
+
+@pytest.mark.timeout(60)
+def test_a_replan_after_the_worker_died_starts_a_new_worker(bench: Path, pool: WorkerPool) -> None:
+    planner = UPPlanner("fast-downward", pool=pool)
+    task = gripper(bench)
+    assert planner.solve(task, timeout=30).solved
+    with pool.worker() as worker:
+        os.killpg(worker.pid, signal.SIGKILL)
+        worker.process.wait(timeout=10)
+    result = planner.solve(task, timeout=30, initial_state=_moved(task))
+    assert result.solved and not result.problem_reused
+    assert [s.action for s in result.actions] == ["pick", "move", "drop"]
+
+
+@pytest.mark.timeout(60)
+def test_the_time_limit_holds_for_a_replan_of_a_parsed_problem(
+    bench: Path, pool: WorkerPool
+) -> None:
+    folder = bench / "blocks"
+    task = load_task(folder / "domain.pddl", folder / "probBLOCKS-14-0.pddl")
+    assert UPPlanner("fast-downward", pool=pool).solve(task, timeout=30).solved
+    pyperplan = UPPlanner("pyperplan", pool=pool)
+    result = pyperplan.solve(task, timeout=0.5, initial_state=task.initial_facts)
+    assert result.status is PlanStatus.TIMEOUT
+    assert "killed" in result.explanation
+    # The pool replaces the killed worker, which has to be sent the text again.
+    small = pyperplan.solve(task, timeout=30, goal=["(holding a)"])
+    assert small.solved and not small.problem_reused
+
+
+@pytest.mark.timeout(60)
+def test_a_problem_built_in_code_replans_without_rewriting_it(pool: WorkerPool) -> None:
+    from unified_planning.shortcuts import (
+        BoolType,
+        Fluent,
+        InstantaneousAction,
+        Not,
+        Object,
+        Problem,
+        UserType,
+    )
+
+    room = UserType("Room")
+    at = Fluent("at", BoolType(), r=room)
+    move = InstantaneousAction("move", a=room, b=room)
+    move.add_precondition(at(move.parameter("a")))
+    move.add_effect(at(move.parameter("a")), False)
+    move.add_effect(at(move.parameter("b")), True)
+    problem = Problem("rooms-in-code")
+    problem.add_fluent(at, default_initial_value=False)
+    problem.add_action(move)
+    # "end" and "object" are PDDL keywords: the PDDL writer renames them.
+    rooms = [Object(name, room) for name in ("hall", "end", "object")]
+    problem.add_objects(rooms)
+    problem.set_initial_value(at(rooms[0]), True)
+    problem.add_goal(at(rooms[1]))
+    problem.add_goal(Not(at(rooms[0])))
+    task = task_from_problem(problem)
+    planner = UPPlanner("fast-downward", pool=pool)
+    assert planner.solve(task, timeout=30).plan_strings() == ["(move hall end)"]
+    replan = planner.solve(task, timeout=30, initial_state=[("at", "object")])
+    assert replan.problem_reused
+    assert replan.plan_strings() == ["(move object end)"]
+    sub = planner.solve(task, timeout=30, goal=[("at", "object")])
+    assert sub.plan_strings() == ["(move hall object)"]
+
+
+def test_lean_copy_writes_the_same_pddl_as_the_original(bench: Path) -> None:
+    from unified_planning.io import PDDLWriter
+
+    for folder, problem in (("gripper", "prob01"), ("elevators-sat08-strips", "p01")):
+        task = load_task(bench / folder / "domain.pddl", bench / folder / f"{problem}.pddl")
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            original = PDDLWriter(task.problem.clone()).get_problem()
+            lean = PDDLWriter(lean_copy(task.problem)).get_problem()
+        assert sorted(original.split("\n")) == sorted(lean.split("\n"))
+        assert lean_copy(task.problem).kind == task.problem.kind
+
+
+def _gripper_with_a_slip(task: PlanningTask) -> tuple[Executive, list[PlanComputed]]:
+    """An executive whose first ``move rooma roomb`` ends with the robot back in rooma."""
+    world = SimulatedWorld(task)
+    skills = symbolic_skills(world)
+    slipped: list[bool] = []
+
+    class SlippingMove(smach.State):
+        def __init__(self, *args: str) -> None:
+            super().__init__(
+                outcomes=["succeeded", "aborted", "preempted"], output_keys=["observations"]
+            )
+            self.args = args
+
+        def execute(self, ud: smach.UserData) -> str:
+            ok, observations = world.perform(PlanStep("move", self.args))
+            if not slipped and self.args == ("rooma", "roomb"):
+                slipped.append(True)
+                with world._lock:
+                    world._facts -= {("at-robby", "roomb")}
+                    world._facts |= {("at-robby", "rooma")}
+                observations = [
+                    (("at-robby", "roomb"), False),
+                    (("at-robby", "rooma"), True),
+                ]
+            ud.observations = observations
+            return "succeeded" if ok else "aborted"
+
+    skills.add("move", SlippingMove)
+    return Executive(task, skills, "fast-downward"), []
+
+
+@pytest.mark.timeout(60)
+def test_executive_repair_plans_only_the_missing_prefix(bench: Path) -> None:
+    task = gripper(bench)
+    executive, plans = _gripper_with_a_slip(task)
+    executive.add_listener(lambda e: plans.append(e) if isinstance(e, PlanComputed) else None)
+    assert executive.execute() == "succeeded"
+    assert executive.report.repairs == 1, executive.report.decisions
+    repair = next(p for p in plans if p.reason.startswith("repair"))
+    assert repair.steps == ("(move rooma roomb)",)
+    assert executive.report.goal_reached
+
+
+@pytest.mark.timeout(60)
+def test_replan_only_policy_replans_from_the_belief_after_one_failure(bench: Path) -> None:
+    task = gripper(bench)
+    world = SimulatedWorld(task)
+    skills = symbolic_skills(world)
+    failed: list[bool] = []
+    executive = Executive(task, skills, "fast-downward", policy=ReplanPolicy.named("replan-only"))
+    original = world.perform
+
+    def perform_failing_once(step: PlanStep):  # type: ignore[no-untyped-def]
+        if not failed and step.action == "drop":
+            failed.append(True)
+            return False, []
+        return original(step)
+
+    world.perform = perform_failing_once  # type: ignore[method-assign]
+    plans: list[PlanComputed] = []
+    executive.add_listener(lambda e: plans.append(e) if isinstance(e, PlanComputed) else None)
+    assert executive.execute() == "succeeded"
+    assert executive.report.replans == 1 and executive.report.planner_calls == 2
+    assert plans[1].reason.startswith("replan")
