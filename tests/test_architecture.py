@@ -1,0 +1,64 @@
+"""docs/architecture.md's package picture is generated from the code and stays true."""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+from pathlib import Path
+from types import ModuleType
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _package_graph() -> ModuleType:
+    spec = importlib.util.spec_from_file_location("package_graph", ROOT / "tools/package_graph.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules.setdefault("package_graph", module)
+    spec.loader.exec_module(module)
+    return module
+
+
+pg = _package_graph()
+
+
+def test_plan_bridge_units_import_each_other_without_cycles() -> None:
+    cycles = [c for c in pg.unit_cycles(pg.build()) if frozenset(c) not in pg.ALLOWED_CYCLES]
+    assert cycles == []
+
+
+def test_every_data_flow_arrow_names_a_type_the_consumer_imports_from_the_producer() -> None:
+    assert pg.check_flows(pg.build()) == []
+
+
+def test_architecture_doc_holds_the_generated_package_picture() -> None:
+    current = (ROOT / "docs/architecture.md").read_text(encoding="utf-8")
+    assert pg.render_doc(current, pg.mermaid(pg.build())) == current, (
+        "docs/architecture.md is out of date: run python tools/package_graph.py --write"
+    )
+
+
+def test_cycle_detection_reports_a_cycle_between_two_units(tmp_path: Path) -> None:
+    pkg = tmp_path / "plan_bridge"
+    for sub, other in (("pddl", "planning"), ("planning", "pddl")):
+        (pkg / sub).mkdir(parents=True)
+        (pkg / sub / "__init__.py").write_text(f"from plan_bridge.{other} import thing\n")
+    (pkg / "__init__.py").write_text("")
+    assert pg.unit_cycles(pg.build(tmp_path)) == [["plan_bridge.pddl", "plan_bridge.planning"]]
+
+
+def test_imports_under_type_checking_are_not_dependencies(tmp_path: Path) -> None:
+    pkg = tmp_path / "plan_bridge"
+    (pkg / "pddl").mkdir(parents=True)
+    (pkg / "planning").mkdir()
+    (pkg / "__init__.py").write_text("")
+    (pkg / "planning" / "__init__.py").write_text("from plan_bridge.pddl import Task\n")
+    (pkg / "pddl" / "__init__.py").write_text(
+        "from typing import TYPE_CHECKING\n"
+        "if TYPE_CHECKING:\n"
+        "    from plan_bridge.planning import Plan\n"
+        "class Task: ...\n"
+    )
+    graph = pg.build(tmp_path)
+    assert graph.edges == {("plan_bridge.planning", "plan_bridge.pddl")}
+    assert "Task" in graph.defines["plan_bridge.pddl"]
