@@ -178,18 +178,18 @@ class StateMachine(Container):
     def set_initial_state(
         self, initial_states: Sequence[str], userdata: UserData | None = None
     ) -> None:
-        """Start the next run in ``initial_states[0]``, merging ``userdata`` in."""
+        """Start the next run in ``initial_states[0]``, merging ``userdata`` in.
+
+        The label is checked with the other consistency checks (``close()``,
+        ``execute()``), not here: SMACH code may name the initial state before adding it.
+        """
         labels = [initial_states] if isinstance(initial_states, str) else list(initial_states)
         if len(labels) != 1:
             raise InvalidStateError(
                 f"{self._path}: a StateMachine has exactly one initial state, got {labels}"
             )
-        if labels[0] not in self._states:
-            raise InvalidStateError(
-                f"{self._path}: initial state {labels[0]!r} is not a child; "
-                f"children: {', '.join(self._states) or 'none'}"
-            )
         self._initial_state_label = labels[0]
+        self._slots = None
         if userdata is not None:
             self._userdata.update(userdata)
 
@@ -208,7 +208,9 @@ class StateMachine(Container):
             problems.append(f"{self._path}: no initial state")
         elif self._initial_state_label not in self._states:
             problems.append(
-                f"{self._path}: initial state {self._initial_state_label!r} is not a child"
+                f"{self._path}: initial state {self._initial_state_label!r} (set_initial_state) "
+                f"is not a child; add a state with that label or name one of: "
+                f"{', '.join(self._states)}"
             )
         for label, table in self._transitions.items():
             registered = self._states[label].get_registered_outcomes()
@@ -228,8 +230,9 @@ class StateMachine(Container):
                 elif target not in self._states and target not in outcomes:
                     problems.append(
                         f"{where}: outcome {outcome!r} leads to unknown target {target!r}; "
-                        f"targets: states {list(self._states)} or container outcomes "
-                        f"{list(outcomes)}"
+                        f"add a state labelled {target!r} to {self._path}, add {target!r} to its "
+                        f"outcomes, or change the transition to one of: states "
+                        f"{list(self._states)} or container outcomes {list(outcomes)}"
                     )
         return problems
 

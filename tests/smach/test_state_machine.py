@@ -109,10 +109,29 @@ def test_set_initial_state_merges_userdata() -> None:
     assert sm.userdata.x == 1
 
 
-def test_set_initial_state_rejects_unknown_label() -> None:
+def test_set_initial_state_unknown_label_is_reported_at_execute() -> None:
     sm = chain("A")
-    with pytest.raises(smach.InvalidStateError):
+    sm.set_initial_state(["NOPE"])  # checked with the other consistency checks
+    with pytest.raises(smach.InvalidTransitionError, match="initial state 'NOPE'"):
+        sm.execute()
+
+
+def test_set_initial_state_may_name_a_state_added_later() -> None:
+    sm = smach.StateMachine(["done"])
+    with sm:
+        sm.set_initial_state(["B"])
+        smach.StateMachine.add("A", Leaf(["done"]))
+        smach.StateMachine.add("B", Leaf(["done"]))
+    assert sm.get_initial_states() == ["B"]
+    assert sm.execute() == "done"
+    assert sm["A"].calls == 0  # type: ignore[attr-defined]
+
+
+def test_set_initial_state_unknown_label_is_reported_at_close() -> None:
+    sm = smach.StateMachine(["done"])
+    with pytest.raises(smach.InvalidTransitionError, match="initial state 'NOPE'"), sm:
         sm.set_initial_state(["NOPE"])
+        smach.StateMachine.add("A", Leaf(["done"]))
 
 
 def test_execute_can_be_repeated() -> None:
