@@ -17,6 +17,7 @@ import csv
 import multiprocessing
 import os
 import queue
+import socket
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -27,7 +28,9 @@ __all__ = [
     "APPROACHES",
     "DEFAULT_APPROACHES",
     "FIELDS",
+    "VARYING_FIELDS",
     "RunSpec",
+    "failure_row",
     "read_results",
     "run_one",
     "run_study",
@@ -71,7 +74,13 @@ FIELDS = [
     "absorbed_repair",
     "absorbed_replan",
     "error",
+    # Where the run ran: the only columns, with the timings, that differ between runs
+    # of the same spec (on another worker, machine or cluster).
+    "host",
+    "worker",
 ]
+#: Columns that may differ between two runs of the same spec; all others may not.
+VARYING_FIELDS = ("wall_time_s", "planning_time_s", "host", "worker")
 
 
 @dataclass(frozen=True)
@@ -106,6 +115,20 @@ def _row_key(row: dict[str, str]) -> tuple[str, str, str, str, str, str]:
         f"{float(row['fault_rate']):g}",
         row["seed"],
     )
+
+
+def failure_row(spec: RunSpec, outcome: str, error: str, wall_time_s: float) -> dict[str, Any]:
+    """The row of a run that did not finish by itself (``timeout``, ``crashed``)."""
+    row: dict[str, Any] = dict.fromkeys(FIELDS, "")
+    row.update(
+        zip(
+            ("target", "problem", "variant", "approach", "fault_rate", "seed"),
+            spec.key,
+            strict=True,
+        )
+    )
+    row.update(outcome=outcome, goal_reached=False, wall_time_s=round(wall_time_s, 3), error=error)
+    return row
 
 
 # -- one run (in a worker process) ---------------------------------------------------------
@@ -248,7 +271,9 @@ def _worker(tasks: Any, results: Any) -> None:
         if item is None:
             return
         index, spec = item
-        results.put((index, run_one(spec)))
+        row = run_one(spec)
+        row.update(host=socket.gethostname(), worker=f"local pid {os.getpid()}")
+        results.put((index, row))
 
 
 @dataclass
@@ -304,22 +329,15 @@ class _Pool:
             worker.process.kill()
             worker.process.join(5)
             spec = worker.current[1]
-            row: dict[str, Any] = dict.fromkeys(FIELDS, "")
-            row.update(
-                zip(
-                    ("target", "problem", "variant", "approach", "fault_rate", "seed"),
-                    spec.key,
-                    strict=True,
-                )
-            )
-            row.update(
-                outcome="timeout" if overran else "crashed",
-                goal_reached=False,
-                wall_time_s=round(now - worker.since, 3),
-                error=f"run exceeded {run_timeout:g} s"
+            row = failure_row(
+                spec,
+                "timeout" if overran else "crashed",
+                f"run exceeded {run_timeout:g} s"
                 if overran
                 else f"worker died (exit {worker.process.exitcode})",
+                now - worker.since,
             )
+            row.update(host=socket.gethostname(), worker=f"local pid {worker.process.pid}")
             self.workers[n] = self._start()
             on_result(spec, row)
 
@@ -340,6 +358,30 @@ def read_results(path: Path) -> list[dict[str, str]]:
         return [row for row in csv.DictReader(f) if row.get("outcome")]
 
 
+def _upgrade_header(path: Path) -> None:
+    """Rewrite a ``results.csv`` of an older version with the current columns."""
+    if not path.exists() or path.stat().st_size == 0:
+        return
+    with path.open(newline="", encoding="utf-8") as f:
+        header = next(csv.reader(f), [])
+    if header == FIELDS:
+        return
+    unknown = [h for h in header if h not in FIELDS]
+    if unknown:
+        raise ValueError(
+            f"{path}: columns {unknown} are not study columns; is this a study's results.csv?"
+        )
+    rows = read_results(path)
+    tmp = path.with_suffix(".csv.tmp")
+    with tmp.open("w", newline="", encoding="utf-8") as f:
+        writer = csv.DictWriter(f, fieldnames=FIELDS)
+        writer.writeheader()
+        writer.writerows([{k: r.get(k) or "" for k in FIELDS} for r in rows])
+        f.flush()
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
+
+
 def run_study(
     specs: Sequence[RunSpec],
     out: Path,
@@ -347,16 +389,24 @@ def run_study(
     jobs: int = 2,
     run_timeout: float = 300.0,
     progress: Any = None,
+    cluster: str | None = None,
 ) -> list[dict[str, str]]:
-    """Run what ``results.csv`` in ``out`` does not have yet; return every requested row."""
+    """Run what ``results.csv`` in ``out`` does not have yet; return every requested row.
+
+    ``cluster`` (``tcp://HOST:PORT`` or ``local:N``) runs each run as a Dask task
+    (:mod:`plan_bridge.study.cluster`); without it, ``jobs`` local worker processes do.
+    """
+    from plan_bridge.study.environment import machine_info, record_session
     from smach.introspection.journal import drop_torn_line
 
     out.mkdir(parents=True, exist_ok=True)
     results_path = out / "results.csv"
     drop_torn_line(results_path)
+    _upgrade_header(results_path)
     existing = read_results(results_path)
     done = {_row_key(r) for r in existing}
     todo = [s for s in specs if s.key not in done]
+    unique_todo = list({s.key: s for s in reversed(todo)}.values())[::-1]
     new_file = not results_path.exists() or results_path.stat().st_size == 0
     started = time.monotonic()
     finished = 0
@@ -367,17 +417,33 @@ def run_study(
 
         def on_result(spec: RunSpec, row: dict[str, Any]) -> None:
             nonlocal finished
+            if spec.key in done:
+                return  # never write a run twice, whatever the executor delivers
+            done.add(spec.key)
             writer.writerow(row)
             f.flush()
             os.fsync(f.fileno())
             finished += 1
             if progress is not None:
-                progress(finished, len(todo), spec, row, time.monotonic() - started)
+                progress(finished, len(unique_todo), spec, row, time.monotonic() - started)
 
-        if todo:
-            pool = _Pool(max(1, min(jobs, len(todo))))
+        if unique_todo:
+            pool: Any
+            if cluster:
+                from plan_bridge.study.cluster import DaskPool
+
+                targets = sorted({str(Path(s.target).resolve()) for s in unique_todo})
+                pool = DaskPool(cluster, targets)
+                record_session(out, executor=f"dask {cluster}", workers=pool.workers)
+            else:
+                jobs = max(1, min(jobs, len(unique_todo)))
+                pool = _Pool(jobs)
+                # Local workers run on this machine: one description stands for all.
+                record_session(
+                    out, executor=f"local, {jobs} processes", workers={"local": machine_info()}
+                )
             try:
-                pool.run(todo, run_timeout, on_result)
+                pool.run(unique_todo, run_timeout, on_result)
             finally:
                 pool.close()
     wanted = {s.key for s in specs}

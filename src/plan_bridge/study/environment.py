@@ -1,0 +1,101 @@
+"""What a study ran on: package and planner versions, CPU model and count, per machine.
+
+A study appends one *session* (the machine that wrote the rows and, on a cluster,
+every worker's machine) to ``environment.json`` in its output folder each time it
+runs, so a resumed study reports every machine that contributed rows. Versions are
+read from package metadata: nothing here imports a planner or Dask.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import socket
+import sys
+import time
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+__all__ = ["PACKAGES", "PLANNER_PACKAGES", "machine_info", "read_sessions", "record_session"]
+
+#: Distributions whose versions the report records.
+PACKAGES = (
+    "smach-planner",
+    "unified-planning",
+    "up-fast-downward",
+    "up-pyperplan",
+    "pyperplan",
+    "matplotlib",
+    "dask",
+    "distributed",
+)
+#: The packages that carry each planner engine of the study.
+PLANNER_PACKAGES = {
+    "fast-downward": ("up-fast-downward",),
+    "pyperplan": ("up-pyperplan", "pyperplan"),
+}
+
+
+def _version(name: str) -> str:
+    try:
+        return metadata.version(name)
+    except metadata.PackageNotFoundError:
+        return ""
+
+
+def cpu_model() -> str:
+    """The CPU's model name (``/proc/cpuinfo`` on Linux, else what ``platform`` knows)."""
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as f:
+            for line in f:
+                if line.lower().startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine() or "unknown"
+
+
+def machine_info() -> dict[str, Any]:
+    """This process's machine: host, CPU, OS, Python and package versions."""
+    return {
+        "host": socket.gethostname(),
+        "cpu_model": cpu_model(),
+        "cpu_count": os.cpu_count() or 0,
+        "platform": platform.platform(),
+        "python": platform.python_version(),
+        "packages": {name: v for name in PACKAGES if (v := _version(name))},
+    }
+
+
+def record_session(out: Path, *, executor: str, workers: dict[str, dict[str, Any]]) -> None:
+    """Append this session (the writing machine plus each worker's) to ``environment.json``."""
+    path = out / "environment.json"
+    sessions = read_sessions(out)
+    sessions.append(
+        {
+            "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+            "executor": executor,
+            "argv": sys.argv[1:],
+            "writer": machine_info(),
+            "workers": workers,
+        }
+    )
+    tmp = path.with_suffix(".json.tmp")
+    tmp.write_text(json.dumps({"sessions": sessions}, indent=2) + "\n", encoding="utf-8")
+    os.replace(tmp, path)
+
+
+def read_sessions(out: Path) -> list[dict[str, Any]]:
+    path = out / "environment.json"
+    if not path.exists():
+        return []
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except json.JSONDecodeError as exc:
+        raise ValueError(
+            f"{path}: not valid JSON ({exc}); delete it to start a new record"
+        ) from exc
+    sessions = data.get("sessions", []) if isinstance(data, dict) else []
+    return [s for s in sessions if isinstance(s, dict)]
