@@ -21,7 +21,7 @@ import threading
 import time
 import warnings
 import weakref
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Protocol, runtime_checkable
 
@@ -160,10 +160,17 @@ def _oneshot_planners() -> list[str]:
     return names
 
 
-def get_planner(name: str = DEFAULT_PLANNER, *, pool: WorkerPool | None = None) -> UPPlanner:
+def get_planner(
+    name: str = DEFAULT_PLANNER,
+    *,
+    pool: WorkerPool | None = None,
+    params: Mapping[str, Any] | None = None,
+    label: str | None = None,
+) -> UPPlanner:
     """The planner called ``name``; raises :class:`PlannerNotFoundError` listing the
-    installed ones if there is none."""
-    return UPPlanner(name, pool=pool)
+    installed ones if there is none. ``params`` configure the engine, ``label`` names
+    that configuration (see :class:`UPPlanner`)."""
+    return UPPlanner(name, pool=pool, params=params, label=label)
 
 
 class UPPlanner:
@@ -172,7 +179,10 @@ class UPPlanner:
     ``engine`` is a UP engine name: ``"fast-downward"`` (default),
     ``"fast-downward-opt"``, ``"pyperplan"``, ``"pyperplan-opt"`` or any other
     installed one-shot planner. ``explain_timeout`` bounds the delete-relaxation
-    analysis that explains a "no plan" answer.
+    analysis that explains a "no plan" answer. ``params`` go to the engine as UP's
+    ``OneshotPlanner(params=...)`` (for Fast Downward e.g.
+    ``{"fast_downward_search_config": "..."}``); ``label`` is then the planner's
+    :attr:`name` (default: the engine name).
     """
 
     def __init__(
@@ -181,11 +191,15 @@ class UPPlanner:
         *,
         pool: WorkerPool | None = None,
         explain_timeout: float = 5.0,
+        params: Mapping[str, Any] | None = None,
+        label: str | None = None,
     ) -> None:
         available = _oneshot_planners()
         if engine not in available:
             raise PlannerNotFoundError(engine, [n for n in available if "[" not in n])
         self._engine = engine
+        self.params = dict(params or {})
+        self._label = label or engine
         self._pool = pool
         self.explain_timeout = explain_timeout
         self._unsupported: weakref.WeakKeyDictionary[PlanningTask, list[str]] = (
@@ -194,10 +208,11 @@ class UPPlanner:
 
     @property
     def name(self) -> str:
-        return self._engine
+        return self._label
 
     def __repr__(self) -> str:
-        return f"UPPlanner({self._engine!r})"
+        extra = f", params={self.params!r}" if self.params else ""
+        return f"UPPlanner({self._engine!r}{extra})"
 
     @property
     def pool(self) -> WorkerPool:
@@ -254,6 +269,7 @@ class UPPlanner:
         timeout: float = 60.0,
         initial_state: Iterable[FactLike] | None = None,
         goal: Iterable[FactLike] | None = None,
+        cancel: threading.Event | None = None,
     ) -> PlanResult:
         """Plan for ``task`` within ``timeout`` seconds of engine wall-clock time.
 
@@ -267,7 +283,8 @@ class UPPlanner:
         status ``timeout``. (Starting a worker, about 0.5 s, happens before the
         clock starts; :meth:`warm_up` moves it out of the way.) Raises
         :class:`~plan_bridge.errors.FactError` for an ``initial_state`` fact or goal
-        atom that does not fit the task.
+        atom that does not fit the task. Setting ``cancel`` during the solve kills
+        its worker; the result then has status ``timeout`` and says it was cancelled.
         """
         if timeout <= 0:
             raise ValueError(f"timeout must be positive, got {timeout!r}")
@@ -313,6 +330,12 @@ class UPPlanner:
                 timeout,
                 init=None if facts is None else [source.pddl_atom(f) for f in sorted(facts)],
                 goal=None if goal_atoms is None else [source.pddl_atom(a) for a in goal_atoms],
+                params=self.params,
+                cancel=cancel,
+            )
+        if reply.outcome == "cancelled":
+            return self._finish(
+                view, started, PlanStatus.TIMEOUT, f"{self.name}: {reply.message}", notes
             )
         notes.extend(w for w in reply.warnings if not any(i in w for i in _IGNORED_WARNINGS))
         result = self._interpret(view, started, timeout, reply, source.writer, notes, missing)
@@ -481,7 +504,7 @@ class UPPlanner:
         return PlanResult(
             status=status,
             actions=steps or [],
-            planner=self._engine,
+            planner=self._label,
             planning_time_s=time.monotonic() - started,
             explanation=explanation,
             warnings=tuple(dict.fromkeys(notes)),

@@ -49,7 +49,7 @@ import tempfile
 import threading
 import time
 from collections import OrderedDict
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import IO, Any
 
@@ -70,7 +70,8 @@ class SolveReply:
 
     outcome: str
     """``"result"`` (engine returned), ``"error"`` (engine raised), ``"timeout"``
-    (killed at the deadline) or ``"crashed"`` (worker died)."""
+    (killed at the deadline), ``"cancelled"`` (killed on the caller's request) or
+    ``"crashed"`` (worker died)."""
     status: str = ""
     """The UP ``PlanGenerationResultStatus`` name, for ``"result"``."""
     plan: tuple[tuple[str, tuple[str, ...]], ...] = ()
@@ -205,10 +206,15 @@ class Worker:
         init: Iterable[Sequence[str]] | None = None,
         goal: Iterable[Sequence[str]] | None = None,
         engine_timeout: bool = True,
+        params: Mapping[str, Any] | None = None,
+        cancel: threading.Event | None = None,
     ) -> SolveReply:
         """Solve ``base`` (with ``init`` as its true initial facts and ``goal`` as its
         goal conjunction, when given); kill the worker if it does not answer within
-        ``timeout``."""
+        ``timeout``. ``params`` go to the engine (UP ``OneshotPlanner(params=...)``,
+        e.g. a Fast Downward search configuration); setting ``cancel`` kills the
+        worker and returns the outcome ``"cancelled"`` (a portfolio stops the
+        members that lost)."""
         self.wait_ready()
         workdir = tempfile.mkdtemp(prefix="plan-bridge-solve-")
         request: dict[str, Any] = {
@@ -220,6 +226,7 @@ class Worker:
             # and reports TIMEOUT); the kill below is what makes the limit hard.
             "timeout": timeout if engine_timeout else None,
             "workdir": workdir,
+            "params": dict(params) if params else None,
         }
         started = time.monotonic()
         deadline = started + timeout + _KILL_GRACE_S
@@ -228,7 +235,7 @@ class Worker:
             while True:
                 if send_text:
                     request.update(domain=base.domain, problem=base.problem)
-                reply = self._exchange(request, deadline, timeout, started)
+                reply = self._exchange(request, deadline, timeout, started, cancel)
                 if isinstance(reply, SolveReply):
                     self._bases.pop(base.key, None)
                     return reply
@@ -263,7 +270,12 @@ class Worker:
             self._bases.popitem(last=False)
 
     def _exchange(
-        self, request: dict[str, Any], deadline: float, timeout: float, started: float
+        self,
+        request: dict[str, Any],
+        deadline: float,
+        timeout: float,
+        started: float,
+        cancel: threading.Event | None = None,
     ) -> dict[str, Any] | SolveReply:
         """Send one request and wait for its reply until ``deadline``."""
         self._next_id += 1
@@ -286,9 +298,20 @@ class Worker:
         finally:
             self._write_lock.release()
         while True:
+            left = max(0.0, deadline - time.monotonic())
             try:
-                reply = self._replies.get(timeout=max(0.0, deadline - time.monotonic()))
+                # With a cancel event, wake up every 20 ms to look at it.
+                reply = self._replies.get(timeout=left if cancel is None else min(left, 0.02))
             except queue.Empty:
+                if cancel is not None and left > 0.02:
+                    if not cancel.is_set():
+                        continue
+                    self.kill()
+                    return SolveReply(
+                        "cancelled",
+                        message="cancelled: killed the planner process",
+                        engine_time_s=time.monotonic() - started,
+                    )
                 self.kill()
                 return SolveReply(
                     "timeout",
@@ -642,7 +665,7 @@ def _solve_request(reader: Any, request: dict[str, Any]) -> dict[str, Any]:
         warnings.simplefilter("always")
         try:
             problem = base.derive(request.get("init"), request.get("goal"))
-            with OneshotPlanner(name=request["engine"]) as planner:
+            with OneshotPlanner(name=request["engine"], params=request.get("params")) as planner:
                 result = planner.solve(problem, timeout=request["timeout"])
         except Exception as exc:
             return {
