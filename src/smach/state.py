@@ -113,6 +113,9 @@ class State:
         if self._bus.listeners:
             t, thread = stamp()
             self._bus.emit(PreemptRequested(path=self._path, time=t, thread=thread))
+        control = self._bus.control
+        if control is not None:
+            control.wake()  # a state held by a pause starts when preempted
 
     def service_preempt(self) -> None:
         """Acknowledge a preempt request: "I stopped because of it"."""

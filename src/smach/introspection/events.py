@@ -25,9 +25,12 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, fields
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from smach.introspection.summary import frozen
+
+if TYPE_CHECKING:
+    from smach.control import Controller
 
 __all__ = [
     "Capture",
@@ -230,6 +233,7 @@ class EventBus:
     __slots__ = (
         "_lock",
         "batch_sinks",
+        "control",
         "event_listeners",
         "listeners",
         "log_info",
@@ -250,6 +254,9 @@ class EventBus:
         self.sinks: tuple[Callable[[Capture], object], ...] = ()
         self.batch_sinks: tuple[Callable[[tuple[Capture, ...]], object], ...] = ()
         self._lock = threading.Lock()
+        # The tree's smach.control.Controller, if one is attached: containers test it
+        # once per transition (None costs one attribute load).
+        self.control: Controller | None = None
 
     def _set(self, listeners: list[Listener]) -> None:
         # sinks and event_listeners first: an emitter that sees a new ``listeners``
@@ -280,6 +287,7 @@ class EventBus:
         self._lock = threading.Lock()
         self.preempt_seen = bool(state.get("preempt_seen", False))
         self.log_info = False
+        self.control = None
 
     def emit(self, event: Event) -> None:
         """Deliver ``event`` to every listener (as a capture to the capture listeners).
