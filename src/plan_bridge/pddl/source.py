@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from plan_bridge.errors import PddlError, UnsupportedFeatureError
+from plan_bridge.pddl.features import classify
 
 __all__ = [
     "DEFAULT_MAX_BYTES",
@@ -294,9 +295,21 @@ def decode_source(data: bytes, path: str, kind: str) -> SourceText:
     return SourceText(text, path, kind)
 
 
-def check_source(source: SourceText, *, max_depth: int = DEFAULT_MAX_DEPTH) -> None:
-    """Structural checks: balanced parentheses, bounded nesting, right file kind,
-    and the constructs unified-planning 1.3 cannot read."""
+def check_source(
+    source: SourceText,
+    *,
+    max_depth: int = DEFAULT_MAX_DEPTH,
+    max_bytes: int = DEFAULT_MAX_BYTES,
+) -> None:
+    """Structural checks: bounded size, balanced parentheses, bounded nesting, right
+    file kind, and the constructs unified-planning 1.3 cannot read."""
+    if len(source.text) > max_bytes:
+        raise source.error(
+            f"the {source.kind} text is {len(source.text) / 1e6:.1f} MB, larger than the "
+            f"{max_bytes / 1e6:.1f} MB limit",
+            None,
+            hint="raise the limit with max_bytes=... if this text is really meant to be loaded",
+        )
     tokens = source.tokens
     if not tokens:
         raise source.error(
@@ -406,6 +419,7 @@ def _check_keywords(source: SourceText) -> None:
             and keywords
             and token.text.startswith(":")
             and token.text not in keywords
+            and classify(token.text) is None  # e.g. :observe: classified, not a typo
             and tokens[index - 1].text != "("  # the section's own keyword
         ):
             raise source.error(
@@ -455,9 +469,10 @@ def _check_requirements(source: SourceText, index: int) -> None:
                 hint="supported requirements: " + " ".join(sorted(UP_REQUIREMENTS)),
                 feature=flag.text,
             )
-        if flag.text not in UP_REQUIREMENTS:
+        if flag.text not in UP_REQUIREMENTS and classify(flag.text) is None:
             raise source.error(
-                f"unknown PDDL requirement {flag.text!r}",
+                f"unknown PDDL requirement {flag.text!r}"
+                + _did_you_mean(flag.text, UP_REQUIREMENTS),
                 flag.offset,
                 hint="allowed requirements: " + " ".join(sorted(UP_REQUIREMENTS)),
             )

@@ -15,13 +15,13 @@ from __future__ import annotations
 
 import dataclasses
 import re
-import warnings
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
 
-from plan_bridge.errors import FactError, PddlError
+from plan_bridge.errors import FactError
+from plan_bridge.pddl.front_end import FrontEnd, analyse, parse_with_up
 from plan_bridge.pddl.source import (
     DEFAULT_MAX_BYTES,
     DEFAULT_MAX_DEPTH,
@@ -277,16 +277,15 @@ def load_task(
     check_source(domain_source, max_depth=max_depth)
     problem_source = read_source(problem, "problem", max_bytes=max_bytes)
     check_source(problem_source, max_depth=max_depth)
-    _prime(prime, domain_source, problem_source)
+    front = analyse(domain_source, problem_source)
+    _prime(prime, front)
     if before_parse is not None:
         before_parse()
-    up_problem, notes = _parse(domain_source, problem_source)
+    up_problem, notes = parse_with_up(front)
     task = task_from_problem(
         up_problem, domain_path=Path(domain), problem_path=Path(problem), warnings=notes
     )
-    return dataclasses.replace(
-        task, domain_text=domain_source.text, problem_text=problem_source.text
-    )
+    return dataclasses.replace(task, domain_text=front.domain_text, problem_text=front.problem_text)
 
 
 def load_task_from_text(
@@ -304,19 +303,19 @@ def load_task_from_text(
     check_source(domain_source, max_depth=max_depth)
     problem_source = decode_source(problem_text.encode("utf-8"), problem_name, "problem")
     check_source(problem_source, max_depth=max_depth)
-    _prime(prime, domain_source, problem_source)
+    front = analyse(domain_source, problem_source)
+    _prime(prime, front)
     if before_parse is not None:
         before_parse()
-    up_problem, notes = _parse(domain_source, problem_source)
+    up_problem, notes = parse_with_up(front)
     task = task_from_problem(up_problem, warnings=notes)
-    return dataclasses.replace(
-        task, domain_text=domain_source.text, problem_text=problem_source.text
-    )
+    return dataclasses.replace(task, domain_text=front.domain_text, problem_text=front.problem_text)
 
 
-def _prime(pool: Primer | None, domain: SourceText, problem: SourceText) -> None:
+def _prime(pool: Primer | None, front: FrontEnd) -> None:
+    # The planner process parses the text UP can read (the front end's rewrite).
     if pool is not None:
-        pool.prime(ProblemText.of(domain.text, problem.text))
+        pool.prime(ProblemText.of(front.domain_text, front.problem_text))
 
 
 def task_from_problem(
@@ -403,105 +402,3 @@ def _goal_atoms(goals: Iterable[Any]) -> tuple[list[Fact], bool]:
         else:
             conjunctive = False
     return atoms, conjunctive
-
-
-# -- parsing with unified-planning ----------------------------------------------
-
-_LOCATION_IN_MESSAGE = re.compile(r"line:? ?(\d+),? col:? ?(\d+)", re.IGNORECASE)
-_PYPARSING_SUFFIX = re.compile(r"\s*\(at char \d+\),?\s*\(line:\s*\d+,\s*col:\s*\d+\)\s*$")
-
-
-def _parse(domain: SourceText, problem: SourceText) -> tuple[Any, list[str]]:
-    ensure_unified_planning()
-    import pyparsing
-    from unified_planning.exceptions import (  # type: ignore[import-untyped]
-        UPUnsupportedProblemTypeError,
-    )
-    from unified_planning.io import PDDLReader  # type: ignore[import-untyped]
-
-    notes: list[str] = []
-    _check_domain_reference(domain, problem, notes)
-    reader = PDDLReader()
-    try:
-        # UP warns (e.g. about unusual constructs) while parsing; warnings belong to
-        # the task, not to the caller's warning filters (tests run with -W error).
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            result = reader.parse_problem_string(domain.text, problem.text)
-        notes.extend(str(w.message) for w in caught)
-        return result, notes
-    except pyparsing.ParseBaseException as exc:
-        source = domain if exc.pstr == domain.text.replace("\t", " ").lower() else problem
-        raise _syntax_error(source, exc) from exc
-    except UPUnsupportedProblemTypeError as exc:
-        source = _guess_failing_source(reader, domain, problem)
-        raise _located(source, str(exc), feature=_first_line(str(exc))) from exc
-    except RecursionError as exc:
-        raise PddlError(
-            "expressions nested too deeply for the PDDL parser",
-            path=problem.path,
-            hint="simplify the nesting of the formulas",
-        ) from exc
-    except Exception as exc:
-        source = _guess_failing_source(reader, domain, problem)
-        raise _located(source, f"{_first_line(str(exc)) or type(exc).__name__}") from exc
-
-
-def _check_domain_reference(domain: SourceText, problem: SourceText, notes: list[str]) -> None:
-    domain_name = domain.tokens[4].text if len(domain.tokens) > 4 else ""
-    for index, token in enumerate(problem.tokens[:-1]):
-        if token.text == ":domain":
-            referenced = problem.tokens[index + 1].text
-            if referenced != domain_name:
-                notes.append(
-                    f"{problem.path}: problem refers to domain {referenced!r}, but the domain "
-                    f"file defines {domain_name!r}"
-                )
-            return
-
-
-def _syntax_error(source: SourceText, exc: Any) -> PddlError:
-    message = _PYPARSING_SUFFIX.sub("", str(exc)).strip()
-    offset = source.offset_of(exc.lineno, exc.col)
-    section = source.section_at(offset)
-    where = f" in ({section} ...)" if section else ""
-    return source.error(
-        f"PDDL syntax error{where}: {message}",
-        offset,
-        hint="unified-planning 1.3 could not parse the form starting here; check it against "
-        "the PDDL grammar (a misspelt keyword, a missing ')' or an unsupported construct)",
-    )
-
-
-def _located(source: SourceText, message: str, *, feature: str | None = None) -> PddlError:
-    first = _first_line(message)
-    match = _LOCATION_IN_MESSAGE.search(message)
-    offset = None
-    if match is not None:
-        offset = source.offset_of(int(match.group(1)), int(match.group(2)))
-        first = _LOCATION_IN_MESSAGE.split(first)[0].rstrip(" .,:;-")
-        first = re.sub(r"(?:from|found at|error in expression from)\s*$", "", first).rstrip(" .,:;")
-    if feature is not None:
-        return source.error(
-            f"unsupported PDDL feature: {first}",
-            offset,
-            hint="the unified-planning 1.3 PDDL reader cannot represent it",
-            feature=feature,
-        )
-    return source.error(f"invalid PDDL: {first}", offset)
-
-
-def _guess_failing_source(reader: Any, domain: SourceText, problem: SourceText) -> SourceText:
-    """UP's semantic errors do not say which file they are about: re-read the
-    domain alone; if that works, the problem file is at fault."""
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            reader.parse_problem_string(domain.text, None)
-    except Exception:
-        return domain
-    return problem
-
-
-def _first_line(text: str) -> str:
-    return text.strip().splitlines()[0] if text.strip() else ""

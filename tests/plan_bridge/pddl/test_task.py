@@ -233,11 +233,13 @@ def test_misspelt_section_is_named_with_the_allowed_ones(tmp_path: Path) -> None
     assert ":constants" in error.hint and ":durative-action" in error.hint
 
 
-def test_syntax_error_only_the_pddl_parser_finds_is_located(tmp_path: Path) -> None:
+def test_parameters_that_are_not_a_list_are_located_before_unified_planning(
+    tmp_path: Path,
+) -> None:
     error = _load_bad_domain(
         tmp_path, DOORS_DOMAIN.replace(":parameters (?k - key ?r - room)", ":parameters ?k")
     )
-    assert "PDDL syntax error" in error.explanation
+    assert error.explanation == ":parameters of unlock must be a list: (?x - type ...)"
     assert error.line is not None and 10 <= error.line <= 14
     assert error.excerpt
 

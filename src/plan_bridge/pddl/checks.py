@@ -1,0 +1,605 @@
+"""Checks of formulas and of the problem against its domain, with positions.
+
+Every atom in a precondition, effect, condition, duration, init, goal or metric is
+checked against the declarations collected by :mod:`~plan_bridge.pddl.model`:
+predicate or function declared, arity, variables in scope, objects and constants
+declared, argument types. Each construct met is classified
+(:mod:`~plan_bridge.pddl.features`): unsupported ones are errors naming the feature;
+features used without their ``:requirements`` flag are warnings naming the flag and
+the line of first use.
+"""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+
+from plan_bridge.pddl.diagnostics import Diagnostics
+from plan_bridge.pddl.features import IMPLIED, classify
+from plan_bridge.pddl.model import DomainModel, Entry, ProblemModel, Signature, typed_list
+from plan_bridge.pddl.sexpr import Atom, Form, Node
+from plan_bridge.pddl.source import SourceText
+
+__all__ = ["Usage", "check_domain", "check_problem", "check_requirements"]
+
+_COMPARISONS = frozenset(["<", ">", "<=", ">="])
+_NUMERIC_EFFECTS = frozenset(["increase", "decrease", "assign", "scale-up", "scale-down"])
+_ARITHMETIC = frozenset(["+", "-", "*", "/"])
+_CONTINGENT = frozenset(["oneof", "unknown", "probabilistic", "preference"])
+
+
+@dataclass
+class Usage:
+    """Requirement flag -> (source, offset) of its first use."""
+
+    first: dict[str, tuple[SourceText, int]] = field(default_factory=dict)
+
+    def note(self, flag: str, source: SourceText, offset: int) -> None:
+        self.first.setdefault(flag, (source, offset))
+
+
+@dataclass
+class _Context:
+    domain: DomainModel
+    source: SourceText
+    diags: Diagnostics
+    usage: Usage
+    names: Mapping[str, Entry]
+    """Objects and constants that may appear as arguments."""
+    durative: bool = False
+    where: str = ""
+
+
+def _suggest(word: str, choices: Iterable[str]) -> str:
+    options = sorted(choices)
+    close = difflib.get_close_matches(word, options, n=1, cutoff=0.6)
+    shown = ", ".join(options[:30]) + (" ..." if len(options) > 30 else "")
+    guess = f"did you mean {close[0]}? " if close else ""
+    return f"{guess}declared: {shown or 'none'}"
+
+
+def check_domain(domain: DomainModel, diags: Diagnostics, usage: Usage) -> None:
+    source = domain.source
+    if domain.typing_at is not None:
+        usage.note(":typing", source, domain.typing_at)
+    declared_types = set(domain.types) | {"object"}
+    for entry in _typed_entries(domain):
+        if entry.type not in declared_types and entry.type_offset is not None:
+            what = (
+                "(:types ...) declares none"
+                if not domain.explicit_types
+                else _suggest(entry.type, declared_types)
+            )
+            diags.error(source, entry.type_offset, f"undeclared type {entry.type!r}", what)
+    for name, entry in domain.constants.items():
+        for kind, table in (("predicate", domain.predicates), ("function", domain.functions)):
+            if name in table:
+                _clash(source, diags, "constant", entry.offset, kind, table[name].offset, name)
+    for action in domain.actions:
+        ctx = _Context(
+            domain,
+            source,
+            diags,
+            usage,
+            domain.constants,
+            durative=action.kind == ":durative-action",
+            where=f"({action.kind} {action.name} ...)",
+        )
+        if ctx.durative:
+            usage.note(":durative-actions", source, action.offset)
+        scope = {p.name: p.type for p in action.params}
+        for keyword, (word, value) in action.parts.items():
+            if value is None or keyword == ":parameters":
+                continue
+            if keyword == ":observe":
+                _unsupported(ctx, ":observe", word.offset)
+            elif keyword == ":precondition":
+                _formula(ctx, value, scope, "pre")
+            elif keyword == ":effect":
+                _formula(ctx, value, scope, "eff")
+            elif keyword == ":condition":
+                _formula(ctx, value, scope, "pre")
+            elif keyword == ":duration":
+                _duration(ctx, value, scope)
+    for head, form in domain.sections:
+        if head in (":derived", ":process", ":event", ":task", ":method", ":constraints"):
+            _unsupported_section(source, diags, head, form)
+
+
+def _typed_entries(domain: DomainModel) -> Iterable[Entry]:
+    yield from domain.types.values()
+    yield from domain.constants.values()
+    for table in (domain.predicates, domain.functions):
+        for signature in table.values():
+            yield from signature.params
+    for action in domain.actions:
+        yield from action.params
+
+
+def _clash(
+    source: SourceText,
+    diags: Diagnostics,
+    kind: str,
+    offset: int,
+    other: str,
+    other_offset: int,
+    name: str,
+    other_source: SourceText | None = None,
+) -> None:
+    where = other_source or source
+    line, column = where.line_col(other_offset)
+    diags.error(
+        source,
+        offset,
+        f"{kind} {name!r} has the name of {'an' if other[0] in 'aeiou' else 'a'} {other} (declared at {where.path}:{line}:{column}); "
+        "PDDL allows it, but the unified-planning 1.3 reader needs distinct names",
+        f"rename the {kind} or the {other}",
+        feature="shared-names",
+    )
+
+
+def _unsupported(ctx: _Context, name: str, offset: int) -> None:
+    support = classify(name)
+    text = support.describe() if support else f"{name} is not supported"
+    ctx.diags.error(ctx.source, offset, f"unsupported PDDL construct: {text}", feature=name)
+
+
+def _unsupported_section(source: SourceText, diags: Diagnostics, head: str, form: Form) -> None:
+    support = classify(head) or classify(":constraints" if head == ":constraints" else head)
+    if head == ":derived":
+        return  # reported by check_source, before any of this runs
+    text = support.describe() if support else f"({head} ...) is not supported"
+    diags.error(source, form.offset, f"unsupported PDDL section: {text}", feature=head)
+
+
+def _formula(ctx: _Context, node: Node, scope: Mapping[str, str], mode: str) -> None:
+    """``mode``: ``pre`` (condition, goal), ``eff`` (effect)."""
+    if isinstance(node, Atom):
+        ctx.diags.error(
+            ctx.source, node.offset, f"expected a formula (...) in {ctx.where}, found {node.text!r}"
+        )
+        return
+    if node.is_empty:
+        return
+    head = node.head
+    args = node.items[1:]
+    if not head:
+        ctx.diags.error(
+            ctx.source,
+            node.offset,
+            f"a formula in {ctx.where} must start with a name or a connective, found '('",
+        )
+        return
+    if head in _CONTINGENT or (head == "or" and mode == "eff"):
+        _unsupported(ctx, head if head != "or" else "oneof", node.offset)
+        return
+    if (
+        ctx.durative
+        and head in ("at", "over")
+        and len(args) == 2
+        and isinstance(args[0], Atom)
+        and args[0].text in ("start", "end", "all")
+    ):
+        _formula(ctx, args[1], scope, mode)
+        return
+    if head == "and":
+        for arg in args:
+            _formula(ctx, arg, scope, mode)
+    elif head in ("or", "imply"):
+        if mode == "pre":
+            ctx.usage.note(":disjunctive-preconditions", ctx.source, node.offset)
+        for arg in args:
+            _formula(ctx, arg, scope, mode)
+    elif head == "not":
+        if len(args) != 1:
+            ctx.diags.error(
+                ctx.source, node.offset, f"(not ...) takes one formula, found {len(args)}"
+            )
+            return
+        inner = args[0]
+        if mode == "pre" and not (isinstance(inner, Form) and inner.head == "="):
+            ctx.usage.note(":negative-preconditions", ctx.source, node.offset)
+        _formula(ctx, inner, scope, mode)
+    elif head in ("exists", "forall"):
+        if len(args) != 2 or not isinstance(args[0], Form):
+            ctx.diags.error(ctx.source, node.offset, f"({head} (?x - type ...) FORMULA) expected")
+            return
+        if mode == "eff":
+            ctx.usage.note(":conditional-effects", ctx.source, node.offset)
+        else:
+            ctx.usage.note(
+                ":existential-preconditions" if head == "exists" else ":universal-preconditions",
+                ctx.source,
+                node.offset,
+            )
+        variables, _ = typed_list(
+            args[0].items, ctx.source, ctx.diags, f"variables of ({head} ...)", variables=True
+        )
+        _check_types(ctx, variables)
+        _formula(ctx, args[1], {**scope, **{v.name: v.type for v in variables}}, mode)
+    elif head == "when" and mode == "eff":
+        ctx.usage.note(":conditional-effects", ctx.source, node.offset)
+        if len(args) != 2:
+            ctx.diags.error(ctx.source, node.offset, "(when CONDITION EFFECT) expected")
+            return
+        _formula(ctx, args[0], scope, "pre")
+        _formula(ctx, args[1], scope, "eff")
+    elif head == "=" and mode == "pre":
+        if all(isinstance(a, Atom) for a in args) and len(args) == 2:
+            ctx.usage.note(":equality", ctx.source, node.offset)
+            for arg in args:
+                _term(ctx, arg, scope)  # type: ignore[arg-type]
+        else:
+            _comparison(ctx, node, scope)
+    elif head in _COMPARISONS and mode == "pre":
+        _comparison(ctx, node, scope)
+    elif head in _NUMERIC_EFFECTS and mode == "eff":
+        if len(args) != 2:
+            ctx.diags.error(ctx.source, node.offset, f"({head} (FUNCTION ...) EXPRESSION) expected")
+            return
+        target = args[0]
+        cost = isinstance(target, Form) and target.head == "total-cost"
+        ctx.usage.note(":action-costs" if cost else ":numeric-fluents", ctx.source, node.offset)
+        if not cost or "total-cost" in ctx.domain.functions:
+            _numeric(ctx, target, scope, note=not cost)
+        _numeric(ctx, args[1], scope, note=not cost)
+    else:
+        _atom(ctx, node, scope)
+
+
+def _comparison(ctx: _Context, node: Form, scope: Mapping[str, str]) -> None:
+    ctx.usage.note(":numeric-fluents", ctx.source, node.offset)
+    if len(node.items) != 3:
+        ctx.diags.error(
+            ctx.source, node.offset, f"({node.head} A B) compares two numeric expressions"
+        )
+        return
+    for arg in node.items[1:]:
+        _numeric(ctx, arg, scope)
+
+
+def _numeric(ctx: _Context, node: Node, scope: Mapping[str, str], *, note: bool = True) -> None:
+    """A numeric expression; ``note``: whether it needs :numeric-fluents (the cost
+    expression of an action-costs increase, init values and the metric do not)."""
+    if isinstance(node, Atom):
+        if node.text.startswith("?"):
+            if node.text == "?duration" and ctx.durative:
+                return
+            if node.text[1:] not in {k.lstrip("?") for k in scope}:
+                ctx.diags.error(
+                    ctx.source,
+                    node.offset,
+                    f"undeclared variable {node.text} in {ctx.where}",
+                    _suggest(node.text, scope),
+                )
+            return
+        try:
+            float(node.text)
+        except ValueError:
+            ctx.diags.error(
+                ctx.source,
+                node.offset,
+                f"expected a number or a numeric expression in {ctx.where}, found {node.text!r}",
+            )
+        return
+    head = node.head
+    if head in _ARITHMETIC:
+        if len(node.items) < 2:
+            ctx.diags.error(ctx.source, node.offset, f"({head} ...) needs arguments")
+        for arg in node.items[1:]:
+            _numeric(ctx, arg, scope, note=note)
+        return
+    if head in ctx.domain.functions or head == "total-cost":
+        if head != "total-cost" and note:
+            ctx.usage.note(":numeric-fluents", ctx.source, node.offset)
+        _atom(ctx, node, scope, numeric=True)
+        return
+    if head in ctx.domain.predicates:
+        ctx.diags.error(
+            ctx.source,
+            node.offset,
+            f"{head} is a predicate, but a numeric expression is expected here in {ctx.where}",
+            "functions: " + (", ".join(sorted(ctx.domain.functions)) or "none"),
+        )
+        return
+    ctx.diags.error(
+        ctx.source,
+        node.offset,
+        f"undeclared function {head!r} in {ctx.where}"
+        if head
+        else f"expected a numeric expression in {ctx.where}",
+        _suggest(head, ctx.domain.functions),
+    )
+
+
+def _duration(ctx: _Context, node: Node, scope: Mapping[str, str]) -> None:
+    if isinstance(node, Form) and node.head == "and":
+        for arg in node.items[1:]:
+            _duration(ctx, arg, scope)
+        return
+    if (
+        not isinstance(node, Form)
+        or node.head not in ("=", "<=", ">=", "<", ">")
+        or len(node.items) != 3
+    ):
+        ctx.diags.error(
+            ctx.source,
+            node.offset,
+            f"expected a duration constraint such as (= ?duration 5) in {ctx.where}",
+        )
+        return
+    if node.head != "=":
+        ctx.usage.note(":duration-inequalities", ctx.source, node.offset)
+    for arg in node.items[1:]:
+        _numeric(ctx, arg, scope)
+
+
+def _atom(ctx: _Context, node: Form, scope: Mapping[str, str], *, numeric: bool = False) -> None:
+    head = node.head
+    signature: Signature | None = (
+        ctx.domain.functions.get(head) if numeric else ctx.domain.predicates.get(head)
+    )
+    if signature is None:
+        if head == "total-cost":
+            return
+        if not numeric and head in ctx.domain.functions:
+            ctx.diags.error(
+                ctx.source,
+                node.offset,
+                f"{head} is a function, but a condition or fact is expected here in {ctx.where}",
+                "compare it, e.g. (>= (" + head + " ...) 0)",
+            )
+            return
+        ctx.diags.error(
+            ctx.source,
+            node.offset + 1,
+            f"undeclared predicate {head!r} in {ctx.where}",
+            _suggest(head, ctx.domain.predicates),
+        )
+        return
+    args = node.items[1:]
+    if len(args) != len(signature.params):
+        line, column = ctx.domain.source.line_col(signature.offset)
+        shown = " ".join(f"{p.name} - {p.type}" for p in signature.params)
+        ctx.diags.error(
+            ctx.source,
+            node.offset,
+            f"{head} takes {len(signature.params)} argument(s), {len(args)} given in {ctx.where}",
+            f"declared as ({head} {shown}) at {ctx.domain.source.path}:{line}:{column}",
+        )
+        return
+    for arg, param in zip(args, signature.params, strict=True):
+        if isinstance(arg, Form):
+            ctx.diags.error(
+                ctx.source,
+                arg.offset,
+                f"argument of {head} must be a name or ?variable, found '(' in {ctx.where}",
+            )
+            continue
+        kind = _term(ctx, arg, scope)
+        if (
+            kind is not None
+            and kind in ctx.domain.types
+            and not ctx.domain.is_subtype(kind, param.type)
+            and not ctx.domain.is_subtype(param.type, kind)
+        ):
+            ctx.diags.error(
+                ctx.source,
+                arg.offset,
+                f"{arg.text} has type {kind!r}, but {param.name} of {head} needs type {param.type!r} in {ctx.where}",
+            )
+
+
+def _term(ctx: _Context, arg: Atom, scope: Mapping[str, str]) -> str | None:
+    """The type of a ``?variable`` or object/constant name, after checking it is declared."""
+    if arg.text.startswith("?"):
+        if arg.text in scope:
+            return scope[arg.text]
+        ctx.diags.error(
+            ctx.source,
+            arg.offset,
+            f"undeclared variable {arg.text} in {ctx.where}",
+            "in scope: " + (" ".join(scope) or "no variables"),
+        )
+        return None
+    entry = ctx.names.get(arg.text)
+    if entry is None:
+        what = "object or constant" if ctx.source.kind == "problem" else "constant"
+        ctx.diags.error(
+            ctx.source,
+            arg.offset,
+            f"undeclared {what} {arg.text!r} in {ctx.where}",
+            _suggest(arg.text, ctx.names),
+        )
+        return None
+    return entry.type
+
+
+def _check_types(ctx: _Context, entries: Iterable[Entry]) -> None:
+    declared = set(ctx.domain.types) | {"object"}
+    for entry in entries:
+        if entry.type not in declared and entry.type_offset is not None:
+            ctx.diags.error(
+                ctx.source,
+                entry.type_offset,
+                f"undeclared type {entry.type!r}",
+                _suggest(entry.type, declared),
+            )
+
+
+def check_problem(
+    domain: DomainModel, problem: ProblemModel, diags: Diagnostics, usage: Usage
+) -> None:
+    source = problem.source
+    ref = problem.domain_ref
+    if ref is None:
+        diags.error(
+            source,
+            problem.tree.offset,
+            "the problem has no (:domain NAME) section",
+            f"add (:domain {domain.name})",
+        )
+    elif domain.name and ref.text != domain.name:
+        line, column = domain.source.line_col(domain.name_offset or 0)
+        diags.error(
+            source,
+            ref.offset,
+            f"this problem is for domain {ref.text!r}, but the domain file defines {domain.name!r} "
+            f"(at {domain.source.path}:{line}:{column})",
+            "pass the domain file this problem was written for, or correct the name",
+        )
+    _check_types(_Context(domain, source, diags, usage, {}), problem.objects.values())
+    names: dict[str, Entry] = dict(domain.constants)
+    for name, entry in problem.objects.items():
+        if name in domain.constants:
+            line, column = domain.source.line_col(domain.constants[name].offset)
+            diags.error(
+                source,
+                entry.offset,
+                f"object {name!r} is already a constant of the domain (at {domain.source.path}:{line}:{column})",
+                "remove it from (:objects ...)",
+            )
+            continue
+        for kind, table in (("predicate", domain.predicates), ("function", domain.functions)):
+            if name in table:
+                _clash(
+                    source,
+                    diags,
+                    "object",
+                    entry.offset,
+                    kind,
+                    table[name].offset,
+                    name,
+                    domain.source,
+                )
+        for action in domain.actions:
+            if action.name == name:
+                _clash(
+                    source,
+                    diags,
+                    "object",
+                    entry.offset,
+                    "action",
+                    action.offset,
+                    name,
+                    domain.source,
+                )
+        names[name] = entry
+    ctx = _Context(domain, source, diags, usage, names, where="(:init ...)")
+    if problem.init is not None:
+        for fact in problem.init.items[1:]:
+            _init_fact(ctx, fact)
+    if problem.goal is not None and len(problem.goal.items) == 2:
+        ctx.where = "(:goal ...)"
+        _formula(ctx, problem.goal.items[1], {}, "pre")
+    if problem.metric is not None:
+        ctx.where = "(:metric ...)"
+        items = problem.metric.items[1:]
+        if (
+            len(items) != 2
+            or not isinstance(items[0], Atom)
+            or items[0].text not in ("minimize", "maximize")
+        ):
+            diags.error(
+                source,
+                problem.metric.offset,
+                "expected (:metric minimize EXPRESSION) or (:metric maximize EXPRESSION)",
+            )
+        else:
+            _numeric(ctx, items[1], {}, note=False)
+    for head, form in problem.sections:
+        if head in (":htn", ":constraints"):
+            _unsupported_section(source, diags, head, form)
+
+
+def _init_fact(ctx: _Context, fact: Node) -> None:
+    if isinstance(fact, Atom) or fact.is_empty:
+        ctx.diags.error(
+            ctx.source,
+            fact.offset,
+            "expected a ground fact such as (at robot kitchen) in (:init ...)",
+        )
+        return
+    head = fact.head
+    args = fact.items[1:]
+    if head in _CONTINGENT or head == "or":
+        _unsupported(ctx, head if head != "or" else "or-init", fact.offset)
+    elif head == "=":
+        if len(args) != 2 or not isinstance(args[0], Form):
+            ctx.diags.error(
+                ctx.source, fact.offset, "expected (= (FUNCTION ...) NUMBER) in (:init ...)"
+            )
+            return
+        _numeric(ctx, args[0], {}, note=False)
+        _numeric(ctx, args[1], {}, note=False)
+    elif (
+        head == "at"
+        and len(args) == 2
+        and isinstance(args[0], Atom)
+        and isinstance(args[1], Form)
+        and _is_number(args[0].text)
+    ):
+        ctx.usage.note(":timed-initial-literals", ctx.source, fact.offset)
+        _init_fact(ctx, args[1])
+    elif head == "not":
+        if len(args) == 1:
+            _init_fact(ctx, args[0])
+    else:
+        _atom(ctx, fact, {})
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def check_requirements(
+    domain: DomainModel, problem: ProblemModel | None, diags: Diagnostics, usage: Usage
+) -> list[str]:
+    """Warn for features used without their flag; classify every declared flag.
+
+    Returns the flags whose engines are not installed (the caller decides whether
+    that is an error)."""
+    declared: dict[str, tuple[SourceText, int]] = {
+        f: (domain.source, o) for f, o in domain.requirements.items()
+    }
+    if problem is not None:
+        for flag, offset in problem.requirements.items():
+            declared.setdefault(flag, (problem.source, offset))
+    closure = set(declared) | {":strips"}
+    for flag in list(closure):
+        closure |= IMPLIED.get(flag, frozenset())
+    for flag, (source, offset) in declared.items():
+        support = classify(flag)
+        if support is not None and support.status == "unsupported":
+            diags.error(
+                source, offset, f"unsupported PDDL requirement: {support.describe()}", feature=flag
+            )
+    for flag, (source, offset) in sorted(
+        usage.first.items(), key=lambda kv: (kv[1][0].kind, kv[1][1])
+    ):
+        if flag in closure:
+            continue
+        support = classify(flag)
+        what = f" ({support.what})" if support else ""
+        line = source.line_col(offset)[0]
+        where = (
+            domain.requirements
+            and f"add it to (:requirements ...) at line {domain.source.line_col(min(domain.requirements.values()))[0]}"
+        )
+        diags.warning(
+            source,
+            offset,
+            f"uses {flag}{what} here (line {line}), but the domain's :requirements does not declare {flag}",
+            where or f"add (:requirements {flag}) to the domain",
+        )
+    missing: list[str] = []
+    for flag in sorted(set(usage.first) | set(declared)):
+        support = classify(flag)
+        if support is not None and support.status == "engine" and not support.installed_engines:
+            missing.append(flag)
+    return missing
