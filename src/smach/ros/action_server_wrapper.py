@@ -25,6 +25,7 @@ from typing import Any
 import smach
 from smach.introspection.events import Event, Transition, UserdataWritten
 from smach.ros._api import ActionServer, CancelResponse, GoalResponse
+from smach.ros.default_node import node_optional
 from smach.ros.executor import SmachExecutor
 
 __all__ = ["ActionServerWrapper"]
@@ -33,6 +34,7 @@ __all__ = ["ActionServerWrapper"]
 class ActionServerWrapper:
     """Expose ``wrapped_container`` as the action ``server_name`` (resolved against ``node``)."""
 
+    @node_optional
     def __init__(
         self,
         node: Any,

@@ -24,6 +24,7 @@ the client parses JSON of bounded size and ignores anything else.
 from __future__ import annotations
 
 import json
+import re
 import threading
 import time
 from collections.abc import Callable
@@ -39,7 +40,15 @@ from smach.introspection.events import (
     Transition,
 )
 from smach.introspection.journal import summarise
-from smach.ros._api import DurabilityPolicy, QoSProfile, ReliabilityPolicy, StringMsg, rclpy
+from smach.ros._api import (
+    DurabilityPolicy,
+    Node,
+    QoSProfile,
+    ReliabilityPolicy,
+    StringMsg,
+    rclpy,
+)
+from smach.ros.default_node import ensure_init
 from smach.ros.executor import (
     SmachExecutor,
     publisher_events,
@@ -72,6 +81,12 @@ def _qos(depth: int) -> Any:
     )
 
 
+def _node_name(topic_base: str) -> str:
+    """A valid node name made from a server name (``/a/b-c`` -> ``a_b_c``)."""
+    name = re.sub(r"[^A-Za-z0-9_]", "_", topic_base.strip("/")) or "smach_introspection"
+    return name if name[0].isalpha() else f"smach_{name}"
+
+
 def _topic_base(server_name: str) -> str:
     name = server_name.strip()
     if not name or name == "/":
@@ -81,13 +96,19 @@ def _topic_base(server_name: str) -> str:
     return name.rstrip("/")
 
 
-class IntrospectionServer:
+class IntrospectionServer(Node):  # type: ignore[misc]
     """Publish the structure and status of every container under ``state``.
 
     ``IntrospectionServer(server_name, state, path)`` as in smach_ros: paths are
-    ``path`` for ``state`` and ``path/LABEL`` below it. ``node`` (new) is the node
-    names are resolved against; without it a node named after ``server_name`` is
-    created (as the ROS 2 original did). Call :meth:`start` (or use ``with``).
+    ``path`` for ``state`` and ``path/LABEL`` below it. As in the ROS 2 smach_ros,
+    the server *is* an rclpy node named after ``server_name`` (``/`` and other
+    characters a node name cannot hold become ``_``), so code that spins it, adds it
+    to an executor, logs through it or calls ``destroy_node()`` keeps working; it
+    does not need to be spun (the publishers live on smach's helper node). If
+    nobody has called ``rclpy.init()``, it is called here (ROS 1 scripts never
+    did: ``rospy.init_node`` was enough). ``node`` (new) is the node names are
+    resolved against (default: the server itself). Call :meth:`start` (or use
+    ``with``, which also destroys the node at the end).
     """
 
     def __init__(
@@ -102,17 +123,18 @@ class IntrospectionServer:
     ) -> None:
         if not path.startswith("/"):
             raise smach.InvalidStateError(f"introspection path must start with '/': {path!r}")
-        self.server_name = _topic_base(server_name)
+        topic_base = _topic_base(server_name)
+        if node is not None:
+            context = node.context
+        context = ensure_init(context)
+        super().__init__(_node_name(topic_base), context=context)
+        self.server_name = topic_base
         self._state = state
         self._root_path = path.rstrip("/") or "/"
         self._period = seconds(update_rate, "update_rate", allow_none=False) or 2.0
-        self._own_node = node is None
-        if node is None:
-            node_name = self.server_name.strip("/").replace("/", "_") or "smach_introspection"
-            node = rclpy.create_node(node_name, context=context or rclpy.get_default_context())
-        self._node = node
-        self._helper = SmachExecutor.for_node(node)
-        base = node.resolve_topic_name(self.server_name)
+        self._node = self if node is None else node
+        self._helper = SmachExecutor.for_node(self._node)
+        base = self._node.resolve_topic_name(self.server_name)
         self.status_topic = base + STATUS_TOPIC
         self.structure_topic = base + STRUCTURE_TOPIC
         self._containers: dict[str, tuple[smach.Container, str]] = {}
@@ -171,8 +193,12 @@ class IntrospectionServer:
             if pub is not None and self._helper.alive:
                 helper_node.destroy_publisher(pub)
         self._status_pub = self._structure_pub = None
-        if self._own_node and self._node.context.ok():
-            self._node.destroy_node()
+
+    def destroy_node(self) -> None:
+        """Stop publishing and remove the server's node from the ROS graph."""
+        self.stop()
+        if self.context.ok():
+            super().destroy_node()
 
     def clear(self) -> None:
         """Forget the containers (as in smach_ros); :meth:`start` maps them again."""
@@ -183,7 +209,7 @@ class IntrospectionServer:
         return self.start()
 
     def __exit__(self, *exc: object) -> None:
-        self.stop()
+        self.destroy_node()
 
     def _state_listen(self, on: bool) -> None:
         if isinstance(self._state, smach.Container):
@@ -346,11 +372,11 @@ class IntrospectionClient:
     """
 
     def __init__(self, node: Any = None, *, context: Any = None) -> None:
-        self._own_node = node is None
-        if node is None:
-            node = rclpy.create_node(
-                "smach_introspection_client", context=context or rclpy.get_default_context()
-            )
+        # A string is the node name of the ROS 2 original: IntrospectionClient(node_name).
+        self._own_node = node is None or isinstance(node, str)
+        if self._own_node:
+            name = node if isinstance(node, str) else "smach_introspection_client"
+            node = rclpy.create_node(name, context=ensure_init(context))
         self._node = node
         self._helper = SmachExecutor.for_node(node)
         self._lock = threading.Condition()

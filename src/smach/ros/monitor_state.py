@@ -21,6 +21,7 @@ from collections.abc import Callable, Iterable
 from typing import Any
 
 import smach
+from smach.ros.default_node import node_optional
 from smach.ros.executor import seconds, subscription_events
 from smach.ros.ros_state import RosState
 
@@ -38,6 +39,7 @@ class MonitorState(RosState):
     ``max_checks`` is -1, else ``invalid``.
     """
 
+    @node_optional
     def __init__(
         self,
         node: Any,

@@ -16,6 +16,7 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any
 
 import smach
+from smach.ros.default_node import node_optional
 from smach.ros.executor import seconds
 from smach.ros.ros_state import POLL_PERIOD, RosState
 
@@ -37,6 +38,7 @@ class ServiceState(RosState):
     ``response_cb(ud, response, *args, **kwargs)`` may return an outcome.
     """
 
+    @node_optional
     def __init__(
         self,
         node: Any,

@@ -28,6 +28,7 @@ from typing import Any
 
 import smach
 from smach.ros._api import ActionClient, GoalStatus
+from smach.ros.default_node import node_optional
 from smach.ros.executor import seconds
 from smach.ros.ros_state import RosState
 
@@ -65,6 +66,7 @@ class SimpleActionState(RosState):
     contributes its keys and outcomes.
     """
 
+    @node_optional
     def __init__(
         self,
         node: Any,

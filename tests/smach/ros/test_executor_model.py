@@ -107,6 +107,6 @@ def test_smach_node_spins_itself(ros: Any) -> None:
 
 
 @pytest.mark.timeout(20)
-def test_a_state_needs_a_node_as_first_argument() -> None:
+def test_a_node_argument_that_is_not_a_node_is_refused() -> None:
     with pytest.raises(smach.InvalidStateError, match="rclpy Node"):
-        SimpleActionState(None, "x", Fibonacci)
+        SimpleActionState(node="not a node", action_name="x", action_spec=Fibonacci)
