@@ -14,6 +14,7 @@ import threading
 from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
 from typing import Any, ClassVar
 
+import smach
 from smach import worker_pool
 from smach.container import Container, construction_method
 from smach.exceptions import InvalidStateError, InvalidUserCodeError
@@ -121,7 +122,7 @@ class Concurrence(Container):
         self._states: dict[str, State] = {}
         self._remappings: dict[str, dict[str, str]] = {}
         self._children: list[_Child] | None = None
-        self._run: _Run | None = None
+        self._current_run: _Run | None = None
         self._child_outcomes: dict[str, str | None] = {}
 
     # -- construction -------------------------------------------------------------------------
@@ -135,11 +136,8 @@ class Concurrence(Container):
         self._adopt_child(label, state)
         self._states[label] = state
         self._remappings[label] = dict(remapping or {})
-        self._children = None
+        self._invalidate()
         return state
-
-    def _invalidate(self) -> None:
-        self._children = None
 
     def consistency_problems(self) -> list[str]:
         problems: list[str] = []
@@ -161,46 +159,33 @@ class Concurrence(Container):
                     )
         return problems
 
-    def _compile(self) -> list[_Child]:
-        self._check_before_run()
-        children = [
+    def _compile(self) -> None:
+        self._children = [
             _Child(label, state, self._remapper(label, state, self._remappings[label]))
             for label, state in self._states.items()
         ]
-        self._children = children
-        return children
 
     # -- execution ------------------------------------------------------------------------------
-    def execute(self, parent_ud: UserData | None = None) -> str | None:
+    def _run(self) -> str | None:
         """Run all children at once; return the outcome chosen by the policy."""
-        children = self._children if self._children is not None else self._compile()
-        if self._run is not None:
-            raise InvalidStateError(f"{self._path} is already running (in another thread?)")
+        children = self._children
+        assert children is not None
         run = _Run(children)
+        self._child_outcomes = run.results
+        self._current_run = run  # publish before reading the flag (see request_preempt)
         try:
-            self._begin(parent_ud)
-            if self._observed():
-                self._emit_started(list(run.results))
-            self._child_outcomes = run.results
-            self._run = run  # publish before reading the flag (see request_preempt)
             if self._preempt_requested:
                 self._preempt_children(run, None)
             self._run_pending(run)
             run.done.acquire()
-            self._run = None
-            if run.errors:
-                raise run.errors[0]
-            outcome = self._decide(run, children)
-            if self._observed():
-                self._emit_terminated(list(run.results), outcome)
-            self._end(parent_ud)
-            return outcome
-        except Exception as exc:
-            self._emit_error(exc)
-            raise
         finally:
-            self._run = None
-            self._after_run()
+            self._current_run = None
+        if run.errors:
+            raise run.errors[0]
+        return self._decide(run, children)
+
+    def _terminal_states(self) -> list[str]:
+        return list(self._states)
 
     def _run_pending(self, run: _Run) -> None:
         """Run children nobody has started yet (the caller and pool threads do this).
@@ -241,7 +226,7 @@ class Concurrence(Container):
 
     def _run_child(self, run: _Run, child: _Child) -> None:
         label = child.label
-        observed = self._bus.listeners or self._local
+        observed = self._bus.listeners or self._local or self._log_info
         try:
             if observed:
                 self._emit_entered(label)
@@ -323,8 +308,7 @@ class Concurrence(Container):
             unserviced = [c for c in children if c.state._preempt_requested]
             for child in unserviced:
                 child.state.recall_preempt()
-                smach_warn = __import__("smach").logwarn
-                smach_warn(f"{self._path}/{child.label} did not service a preempt request")
+                smach.logwarn(f"{self._path}/{child.label} did not service a preempt request")
             if not unserviced:
                 self.service_preempt()
                 if "preempted" in self._outcomes:
@@ -362,12 +346,12 @@ class Concurrence(Container):
     def __getstate__(self) -> dict[str, Any]:
         state = super().__getstate__()
         state["_children"] = None
-        state["_run"] = None
+        state["_current_run"] = None
         return state
 
     def request_preempt(self) -> None:
         super().request_preempt()
-        run = self._run
+        run = self._current_run
         if run is not None:
             self._preempt_children(run, None)
 
@@ -389,7 +373,7 @@ class Concurrence(Container):
         return list(self._states)
 
     def get_active_states(self) -> list[str]:
-        run = self._run
+        run = self._current_run
         if run is None:
             return []
         return [label for label, outcome in list(run.results.items()) if outcome is None]
@@ -402,18 +386,11 @@ class Concurrence(Container):
             for outcome in sorted(wanted)
         ]
 
-    def is_running(self) -> bool:
-        return self._run is not None
+    def _log_started(self, initial_states: Sequence[str]) -> None:
+        smach.loginfo(f"Concurrence starting with userdata: \n\t{list(self._userdata.keys())}")
 
-    def _log_event(self, event: Any) -> None:
-        from smach.introspection.events import ContainerStarted, ContainerTerminated
+    def _log_exited(self, label: str, outcome: str | None) -> None:
+        smach.loginfo(f"Concurrent state '{label}' returned outcome '{outcome}' on termination.")
 
-        smach = __import__("smach")
-        if isinstance(event, ContainerStarted):
-            smach.loginfo(f"Concurrence starting with userdata: \n\t{list(self._userdata.keys())}")
-        elif isinstance(event, StateExited):
-            smach.loginfo(
-                f"Concurrent state '{event.label}' returned outcome '{event.outcome}' on termination."
-            )
-        elif isinstance(event, ContainerTerminated):
-            smach.loginfo(f"Concurrent Outcomes: {dict(self._child_outcomes)}")
+    def _log_terminated(self, terminal_states: Sequence[str], outcome: str | None) -> None:
+        smach.loginfo(f"Concurrent Outcomes: {dict(self._child_outcomes)}")

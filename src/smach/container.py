@@ -1,34 +1,40 @@
 """The ``Container`` interface: a state that holds and runs other states.
 
-Containers share four mechanisms, implemented here once:
+Containers share five mechanisms, implemented here once:
 
 * construction: ``with container:`` opens it on a per-thread construction stack so
   that class-level calls (``StateMachine.add(...)``) act on it; instance calls
   (``sm.add(...)``) act on that instance;
+* the run protocol: :meth:`Container.execute` is the same for every container
+  (compile once, refuse a second concurrent run, begin, started event, the
+  container's own loop :meth:`Container._run`, terminated event, output keys,
+  error event, after-run bookkeeping); a container type writes only ``_run``;
 * scoping: each container owns a local :class:`UserData`; declared input keys are
   copied in from the parent at the start of a run, declared output keys copied out at
   the end; children see it through a :class:`Remapper`;
 * events: every container reports to the event bus of its tree; the SMACH start,
-  transition and termination callbacks and the INFO log lines are listeners of it;
+  transition and termination callbacks are listeners of it; INFO log lines are
+  written beside it (see :mod:`smach.container_events`);
 * preemption: requests are forwarded to the running children; each top-level run
   ends with clean preempt flags in the whole tree.
 
-A new container type subclasses :class:`Container`, implements ``execute`` and the
-introspection methods (``get_children``, ``get_initial_states``,
-``get_active_states``, ``get_internal_edges``, ``set_initial_state``,
-``check_consistency``) and uses the helpers below; see docs/containers.md.
+A new container type subclasses :class:`Container`, implements ``_run`` (and, if it
+precomputes per-child tables, ``_compile``) and the introspection methods
+(``get_children``, ``get_initial_states``, ``get_active_states``,
+``get_internal_edges``, ``set_initial_state``, ``consistency_problems``); see
+docs/containers.md.
 """
 
 from __future__ import annotations
 
 import contextlib
 import functools
-import sys
 import threading
-import time
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
-from typing import Any, ClassVar, Concatenate, Generic, ParamSpec, TypeVar
+from typing import Any, Concatenate, Generic, ParamSpec, TypeVar
 
+import smach as _smach
+from smach.container_events import ContainerEvents
 from smach.exceptions import (
     InvalidConstructionError,
     InvalidOutcomeError,
@@ -38,25 +44,13 @@ from smach.exceptions import (
     NoContainerOpenError,
     SmachError,
 )
-from smach.introspection.events import (
-    ContainerStarted,
-    ContainerTerminated,
-    ErrorRaised,
-    Event,
-    EventBus,
-    Listener,
-    StateEntered,
-    StateExited,
-    Transition,
-    stamp,
-)
+from smach.introspection.events import EventBus
 from smach.log import info_enabled
 from smach.state import State
 from smach.user_data import Remapper, UserData, make_remapper
 
 __all__ = ["Container", "construction_method"]
 
-_monotonic = time.monotonic
 _current_thread = threading.current_thread
 
 C = TypeVar("C", bound="Container")
@@ -105,11 +99,8 @@ def _label_problem(label: object) -> str | None:
     return None
 
 
-class Container(State):
+class Container(ContainerEvents, State):
     """Base class of every container (a state made of states)."""
-
-    #: Which of this container's own events trigger the SMACH transition callbacks.
-    _transition_cb_events: ClassVar[tuple[type[Event], ...]] = (Transition,)
 
     def __init__(
         self,
@@ -125,9 +116,17 @@ class Container(State):
         self._start_cbs: list[tuple[Callable[..., Any], tuple[Any, ...]]] = []
         self._transition_cbs: list[tuple[Callable[..., Any], tuple[Any, ...]]] = []
         self._termination_cbs: list[tuple[Callable[..., Any], tuple[Any, ...]]] = []
-        # Listeners of this container's own events only (callbacks, log lines).
-        self._local: tuple[Listener, ...] = ()
+        self._local = ()
         self._log_info = False
+        self._running = False
+        # The name of the thread running this container, read once per run when
+        # somebody listens (every event of the run's own loop comes from it).
+        self._thread: str | None = None
+        # Compiled state (see _prepare): run tables up to date; this container alone
+        # checked since its last change; it and everything below checked.
+        self._stale = True
+        self._consistent = False
+        self._subtree_ok = False
 
     # -- userdata --------------------------------------------------------------------
     @property
@@ -145,11 +144,19 @@ class Container(State):
         self._invalidate()
 
     def _invalidate(self) -> None:
-        """Hook: drop whatever was compiled from the children and the userdata.
+        """Drop whatever was compiled from the children and the userdata.
 
-        Called when the userdata object is replaced and when this container's or a
-        child's interface changes; the next run rebuilds it.
+        Called when a child is added, the userdata object is replaced and when this
+        container's or a child's interface changes; the next run (or ``close()``)
+        checks and compiles again. The containers above lose their "subtree checked"
+        mark, not their tables (they hold this container, not its insides).
         """
+        self._stale = True
+        self._consistent = False
+        node: Container | None = self
+        while node is not None and node._subtree_ok:
+            node._subtree_ok = False
+            node = node._parent
 
     def _interface_changed(self) -> None:
         self._invalidate()
@@ -173,7 +180,7 @@ class Container(State):
             if key in parent_ud:
                 local[key] = _raw_get(parent_ud, key)
             elif key not in local:
-                sys.modules["smach"].logwarn(
+                _smach.logwarn(
                     f"{self._path}: input key {key!r} is not available in the parent userdata"
                 )
 
@@ -202,6 +209,11 @@ class Container(State):
             )
         stack.pop()
         self.check_consistency()
+        self._consistent = True
+        # Compile now, so that the first run does not; a problem further down is
+        # reported by that run (as it would be without this step).
+        with contextlib.suppress(SmachError):
+            self._prepare()
 
     def __enter__(self: C) -> C:
         self.open()
@@ -280,249 +292,99 @@ class Container(State):
             )
         self._adopt(self._bus, path.rstrip("/") or "")
 
-    # -- events and callbacks ------------------------------------------------------------
-    def add_listener(self, listener: Listener) -> None:
-        """Receive every event of the whole tree this container belongs to."""
-        self._bus.add(listener)
+    # -- the run protocol ---------------------------------------------------------------
+    def execute(self, parent_ud: UserData | None = None) -> str | None:
+        """Run the container; return its outcome (``None`` if smach is shutting down).
 
-    def remove_listener(self, listener: Listener) -> None:
-        self._bus.remove(listener)
+        The run protocol, the same for every container:
 
-    def register_start_cb(self, start_cb: Callable[..., Any], cb_args: Sequence[Any] = ()) -> None:
-        """``start_cb(userdata, initial_states, *cb_args)`` at the start of each run."""
-        self._start_cbs.append((start_cb, tuple(cb_args)))
-        self._refresh_local()
+        1. compile, if anything changed since the last run (``_prepare``: the tree is
+           checked once, the run tables are built);
+        2. refuse a second run while one is going on;
+        3. ``_begin``: copy input keys in, decide who listens this run;
+        4. ``container_started``; then the container's own loop, ``_run()``;
+        5. ``container_terminated``; output keys copied out (skipped when ``_run``
+           returned ``None`` because ``smach.is_shutdown()`` became true);
+        6. on an exception, an ``error`` event before it propagates;
+        7. always: the running flag cleared, and preempt requests addressed to this
+           run dropped (``_after_run``).
+        """
+        if self._stale:
+            self._prepare()
+        if self._running:
+            raise InvalidStateError(f"{self._path} is already running (in another thread?)")
+        self._running = True
+        try:
+            self._begin(parent_ud)
+            bus = self._bus
+            if bus.listeners or self._local:
+                self._thread = _current_thread().name
+                self._emit_started(self._start_states(), self._thread)
+            else:
+                self._thread = None
+                if self._log_info:
+                    self._log_started(self._start_states())
+            outcome = self._run()
+            if outcome is None:
+                return None
+            if bus.listeners or self._local or self._log_info:
+                self._emit_terminated(self._terminal_states(), outcome, self._thread)
+            if parent_ud is not None and self._output_keys:
+                self._copy_output_keys(parent_ud)
+            return outcome
+        except Exception as exc:
+            self._emit_error(exc)
+            raise
+        finally:
+            self._running = False
+            if self._bus.preempt_seen:
+                self._after_run()
 
-    def register_transition_cb(
-        self, transition_cb: Callable[..., Any], cb_args: Sequence[Any] = ()
-    ) -> None:
-        """``transition_cb(userdata, active_states, *cb_args)`` after each transition."""
-        self._transition_cbs.append((transition_cb, tuple(cb_args)))
-        self._refresh_local()
+    def _run(self) -> str | None:
+        """Hook: the container's own loop; return the container's outcome.
 
-    def register_termination_cb(
-        self, termination_cb: Callable[..., Any], cb_args: Sequence[Any] = ()
-    ) -> None:
-        """``termination_cb(userdata, terminal_states, outcome, *cb_args)`` at the end."""
-        self._termination_cbs.append((termination_cb, tuple(cb_args)))
-        self._refresh_local()
+        Called by :meth:`execute` between the start and the end of the protocol, with
+        the local userdata filled in and the compiled tables ready. Run the children,
+        forward preemption, emit the per-child events (``_emit_entered``,
+        ``_emit_exited``, ``_emit_transition`` when :meth:`_observed`), wrap child
+        errors (``_child_error``, ``_bad_outcome``). Return ``None`` only when
+        ``smach.is_shutdown()`` stopped the run.
+        """
+        raise NotImplementedError(f"{type(self).__name__} must implement _run(self)")
 
-    def call_start_cbs(self) -> None:
-        self._call_cbs("start", self._start_cbs, (self._userdata, self.get_initial_states()))
+    def _start_states(self) -> list[str]:
+        """The states a run starts in (the ``container_started`` event's)."""
+        return self.get_initial_states()
 
-    def call_transition_cbs(self) -> None:
-        self._call_cbs(
-            "transition", self._transition_cbs, (self._userdata, self.get_active_states())
-        )
+    def _terminal_states(self) -> list[str]:
+        """The states the last run ended in (the ``container_terminated`` event's)."""
+        return self._start_states()
 
-    def call_termination_cbs(self, terminal_states: Sequence[str], outcome: str | None) -> None:
-        self._call_cbs(
-            "termination", self._termination_cbs, (self._userdata, list(terminal_states), outcome)
-        )
+    def _prepare(self) -> None:
+        """Before a run (or at ``close()``): check the tree once, build the run tables."""
+        if not self._subtree_ok:
+            self._check_before_run()
+        self._compile()
+        self._stale = False
 
-    def _call_cbs(
-        self,
-        kind: str,
-        cbs: list[tuple[Callable[..., Any], tuple[Any, ...]]],
-        args: tuple[Any, ...],
-    ) -> None:
-        # Callbacks observe; a failing observer (say, an introspection publisher) must
-        # not abort the robot's task. The error is logged with where it came from, and
-        # the remaining callbacks still run.
-        for cb, extra in cbs:
-            try:
-                cb(*args, *extra)
-            except Exception as exc:
-                sys.modules["smach"].logerr(
-                    f"{self._path}: {kind} callback {getattr(cb, '__qualname__', cb)!r} raised "
-                    f"{type(exc).__name__}: {exc}"
-                )
+    def _compile(self) -> None:
+        """Hook: build this container's run tables (remappers, transition tables).
 
-    def _callbacks_listener(self, event: Event) -> None:
-        if isinstance(event, ContainerStarted):
-            self._call_cbs("start", self._start_cbs, (self._userdata, list(event.initial_states)))
-        elif isinstance(event, self._transition_cb_events):
-            self.call_transition_cbs()
-        elif isinstance(event, ContainerTerminated):
-            self.call_termination_cbs(event.terminal_states, event.outcome)
+        Called once after every change (see :meth:`_invalidate`), when everything
+        below is known to be consistent; the run loop then only looks things up.
+        """
 
-    def _refresh_local(self, log: bool | None = None) -> None:
-        if log is None:
-            log = self._log_info
-        self._log_info = log
-        local: list[Listener] = []
-        if self._start_cbs or self._transition_cbs or self._termination_cbs:
-            local.append(self._callbacks_listener)
-        if log:
-            local.append(self._log_event)
-        self._local = tuple(local)
+    def is_running(self) -> bool:
+        # (A container that writes its own execute() is running while it has active states.)
+        return self._running or bool(self.get_active_states())
 
-    def _log_event(self, event: Event) -> None:
-        """Write the INFO line of one of this container's events (override per type)."""
-        smach = sys.modules["smach"]
-        if isinstance(event, ContainerStarted):
-            smach.loginfo(
-                f"{type(self).__name__} {self._path} starting in {list(event.initial_states)}"
-            )
-        elif isinstance(event, Transition):
-            smach.loginfo(
-                f"{type(self).__name__} {self._path} transitioning "
-                f"'{event.source}':'{event.outcome}'-->'{event.target}'"
-            )
-        elif isinstance(event, ContainerTerminated):
-            smach.loginfo(
-                f"{type(self).__name__} {self._path} terminating "
-                f"{list(event.terminal_states)} with outcome '{event.outcome}'"
-            )
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        super().__setstate__(state)
+        self._stale = True  # a copy's tables are rebuilt (subclasses drop them in copies)
 
-    def _observed(self) -> bool:
-        """Whether anybody listens to this container's events right now."""
-        return bool(self._bus.listeners or self._local)
-
-    def _emit(self, event: Event) -> None:
-        """Send one of this container's events to the tree's bus and to local listeners."""
-        if self._bus.listeners:
-            self._bus.emit(event)
-        for listener in self._local:
-            listener(event)
-
-    def _deliver(self, event: Event) -> None:
-        """Send an event the capture listeners already got to everybody else."""
-        if self._bus.event_listeners:
-            self._bus.deliver(event)
-        for listener in self._local:
-            listener(event)
-
-    # Event builders, called only when _observed() is true. Capture listeners (journal,
-    # viewer) get a tuple; an Event object is built only when somebody else listens.
-    # ``thread`` may be passed by a caller that already knows it (a run's own thread).
-    def _emit_started(self, initial_states: Sequence[str], thread: str | None = None) -> None:
-        t = _monotonic()
-        if thread is None:
-            thread = _current_thread().name
-        states = tuple(initial_states)
-        kind = type(self).__name__
-        bus = self._bus
-        if bus.sinks:
-            capture = (ContainerStarted, self._path, t, thread, kind, states)
-            for sink in bus.sinks:
-                try:
-                    sink(capture)
-                except Exception as exc:
-                    bus.sink_failed(sink, exc)
-        if bus.event_listeners or self._local:
-            self._deliver(
-                ContainerStarted(
-                    path=self._path,
-                    time=t,
-                    thread=thread,
-                    container_type=kind,
-                    initial_states=states,
-                )
-            )
-
-    def _emit_entered(self, label: str, thread: str | None = None) -> None:
-        t = _monotonic()
-        if thread is None:
-            thread = _current_thread().name
-        path = f"{self._path}/{label}"
-        bus = self._bus
-        if bus.sinks:
-            capture = (StateEntered, path, t, thread, label)
-            for sink in bus.sinks:
-                try:
-                    sink(capture)
-                except Exception as exc:
-                    bus.sink_failed(sink, exc)
-        if bus.event_listeners or self._local:
-            self._deliver(StateEntered(path=path, time=t, thread=thread, label=label))
-
-    def _emit_exited(self, label: str, outcome: str | None, thread: str | None = None) -> None:
-        t = _monotonic()
-        if thread is None:
-            thread = _current_thread().name
-        path = f"{self._path}/{label}"
-        bus = self._bus
-        if bus.sinks:
-            capture = (StateExited, path, t, thread, label, outcome)
-            for sink in bus.sinks:
-                try:
-                    sink(capture)
-                except Exception as exc:
-                    bus.sink_failed(sink, exc)
-        if bus.event_listeners or self._local:
-            self._deliver(
-                StateExited(path=path, time=t, thread=thread, label=label, outcome=outcome)
-            )
-
-    def _emit_transition(
-        self, source: str, outcome: str, target: str, thread: str | None = None
-    ) -> None:
-        t = _monotonic()
-        if thread is None:
-            thread = _current_thread().name
-        bus = self._bus
-        if bus.sinks:
-            capture = (Transition, self._path, t, thread, source, outcome, target)
-            for sink in bus.sinks:
-                try:
-                    sink(capture)
-                except Exception as exc:
-                    bus.sink_failed(sink, exc)
-        if bus.event_listeners or self._local:
-            self._deliver(
-                Transition(
-                    path=self._path,
-                    time=t,
-                    thread=thread,
-                    source=source,
-                    outcome=outcome,
-                    target=target,
-                )
-            )
-
-    def _emit_terminated(
-        self, terminal_states: Sequence[str], outcome: str | None, thread: str | None = None
-    ) -> None:
-        t = _monotonic()
-        if thread is None:
-            thread = _current_thread().name
-        states = tuple(terminal_states)
-        bus = self._bus
-        if bus.sinks:
-            capture = (ContainerTerminated, self._path, t, thread, states, outcome)
-            for sink in bus.sinks:
-                try:
-                    sink(capture)
-                except Exception as exc:
-                    bus.sink_failed(sink, exc)
-        if bus.event_listeners or self._local:
-            self._deliver(
-                ContainerTerminated(
-                    path=self._path,
-                    time=t,
-                    thread=thread,
-                    terminal_states=states,
-                    outcome=outcome,
-                )
-            )
-
-    def _emit_error(self, exc: BaseException) -> None:
-        if self._bus.listeners:
-            t, thread = stamp()
-            self._bus.emit(
-                ErrorRaised(
-                    path=self._path,
-                    time=t,
-                    thread=thread,
-                    error_type=type(exc).__name__,
-                    message=str(exc),
-                )
-            )
-
-    # -- running helpers for container implementations ------------------------------------
+    # -- running helpers (also for containers that write their own execute) ------------
     def _begin(self, parent_ud: UserData | None) -> None:
-        """Start a run: copy input keys in, decide who listens this run.
+        """Start a run: copy input keys in, decide whether log lines are wanted.
 
         Whether INFO lines are wanted is decided once per top-level run (it costs a
         logging lookup) and shared through the bus with the containers below.
@@ -532,8 +394,7 @@ class Container(State):
         bus = self._bus
         if self._parent is None:
             bus.log_info = info_enabled()
-        if bus.log_info is not self._log_info:
-            self._refresh_local(log=bus.log_info)
+        self._log_info = bus.log_info
 
     def _end(self, parent_ud: UserData | None) -> None:
         """Finish a run normally: copy output keys out."""
@@ -625,6 +486,16 @@ class Container(State):
                 f"inconsistent ({count}):\n  " + "\n  ".join(problems)
             )
 
+    def _own_problems(self) -> list[str]:
+        try:
+            return self.consistency_problems()
+        except NotImplementedError:
+            try:
+                self.check_consistency()
+            except SmachError as exc:
+                return [f"{self._path}: {exc}"]
+            return []
+
     def subtree_problems(self) -> list[str]:
         """The consistency problems of this container and of every container below it."""
         problems: list[str] = []
@@ -632,22 +503,32 @@ class Container(State):
         while stack:
             node = stack.pop()
             if isinstance(node, Container):
-                try:
-                    problems.extend(node.consistency_problems())
-                except NotImplementedError:
-                    try:
-                        node.check_consistency()
-                    except SmachError as exc:
-                        problems.append(f"{node._path}: {exc}")
+                problems.extend(node._own_problems())
                 stack.extend(reversed(list(node.get_children().values())))
         return problems
 
     def _check_before_run(self) -> None:
-        """Refuse to run if anything in the tree below is inconsistent (all problems at once)."""
-        self._raise_problems(self.subtree_problems())
+        """Refuse to run if anything in the tree below is inconsistent (all problems at once).
 
-    def is_running(self) -> bool:
-        return bool(self.get_active_states())
+        A container checked since its last change is not checked again, and a subtree
+        found consistent is marked so: a tree is checked once, not once per level.
+        """
+        problems: list[str] = []
+        checked: list[Container] = []
+        stack: list[State] = [self]
+        while stack:
+            node = stack.pop()
+            if not isinstance(node, Container) or node._subtree_ok:
+                continue
+            checked.append(node)
+            if not node._consistent:
+                own = node._own_problems()
+                problems.extend(own)
+                node._consistent = not own
+            stack.extend(reversed(list(node.get_children().values())))
+        self._raise_problems(problems)
+        for node in checked:
+            node._subtree_ok = True
 
 
 _KIND_NAMES = {

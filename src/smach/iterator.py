@@ -10,10 +10,12 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any
 
+import smach
 from smach.container import Container, construction_method
 from smach.exceptions import InvalidStateError, InvalidUserCodeError
 from smach.state import State
 from smach.user_data import Remapper, UserData
+from smach.util import is_shutdown as _never
 from smach.util import key_list
 
 __all__ = ["Iterator"]
@@ -45,7 +47,9 @@ class Iterator(Container):
         self._break_outcomes: list[str] = []
         self._final_outcome_map: dict[str, str] = {}
         self._remapper_cache: Remapper | None = None
-        self._is_running = False
+        self._loops: frozenset[str] = frozenset()
+        self._breaks: frozenset[str] = frozenset()
+        self._registered: frozenset[str] = frozenset()
         self._index = 0
 
     # -- construction ----------------------------------------------------------------------------
@@ -97,11 +101,8 @@ class Iterator(Container):
         self._break_outcomes = breaks
         self._final_outcome_map = dict(final_outcome_map or {})
         self._remapping = dict(remapping or {})
-        self._remapper_cache = None
+        self._invalidate()
         return state
-
-    def _invalidate(self) -> None:
-        self._remapper_cache = None
 
     def consistency_problems(self) -> list[str]:
         if self._state is None or self._state_label is None:
@@ -118,103 +119,90 @@ class Iterator(Container):
                 )
         return problems
 
-    # -- execution -------------------------------------------------------------------------------
-    def execute(self, parent_ud: UserData | None = None) -> str | None:
-        """Run the contained state once per item; return the (mapped) final outcome."""
-        remapper = self._remapper_cache
-        if remapper is None:
-            self._check_before_run()
-            assert self._state is not None and self._state_label is not None
-            remapper = self._remapper(self._state_label, self._state, self._remapping)
-            self._remapper_cache = remapper
-        state = self._state
-        label = self._state_label
+    def _compile(self) -> None:
+        state, label = self._state, self._state_label
         assert state is not None and label is not None
-        if self._is_running:
-            raise InvalidStateError(f"{self._path} is already running (in another thread?)")
-        smach = __import__("smach")
-        self._is_running = True
+        self._remapper_cache = self._remapper(label, state, self._remapping)
+        self._loops = frozenset(self._loop_outcomes)
+        self._breaks = frozenset(self._break_outcomes)
+        self._registered = frozenset(state.get_registered_outcomes())
+
+    # -- execution -------------------------------------------------------------------------------
+    def _run(self) -> str | None:
+        """Run the contained state once per item; return the (mapped) final outcome."""
+        state, label, remapper = self._state, self._state_label, self._remapper_cache
+        assert state is not None and label is not None and remapper is not None
+        items = self._items() if callable(self._items) else self._items
         try:
-            self._begin(parent_ud)
-            if self._observed():
-                self._emit_started([label])
-            items = self._items() if callable(self._items) else self._items
+            iterator = iter(items)
+        except TypeError as exc:
+            raise InvalidUserCodeError(
+                f"{self._path}: the items to iterate are not iterable: {items!r}"
+            ) from exc
+        outcome: str | None = self._exhausted_outcome
+        loops, breaks, registered = self._loops, self._breaks, self._registered
+        data = self._userdata._data
+        it_label = self._items_label
+        bus = self._bus
+        thread = self._thread
+        log = self._log_info
+        self._index = 0
+        preempted = False
+        while True:
+            if smach.is_shutdown is not _never and smach.is_shutdown():
+                return None
             try:
-                iterator = iter(items)
-            except TypeError as exc:
+                item = next(iterator)
+            except StopIteration:
+                outcome = self._exhausted_outcome
+                break
+            except Exception as exc:
                 raise InvalidUserCodeError(
-                    f"{self._path}: the items to iterate are not iterable: {items!r}"
+                    f"{self._path}: the iterable raised {type(exc).__name__} while producing "
+                    f"item {self._index}: {exc}"
                 ) from exc
-            outcome: str | None = self._exhausted_outcome
-            loops = frozenset(self._loop_outcomes)
-            breaks = frozenset(self._break_outcomes)
-            registered = frozenset(state.get_registered_outcomes())
-            data = self._userdata._data
-            it_label = self._items_label
-            self._index = 0
-            preempted = False
-            while True:
-                if smach.is_shutdown():
-                    return None
-                try:
-                    item = next(iterator)
-                except StopIteration:
-                    outcome = self._exhausted_outcome
-                    break
-                except Exception as exc:
-                    raise InvalidUserCodeError(
-                        f"{self._path}: the iterable raised {type(exc).__name__} while producing "
-                        f"item {self._index}: {exc}"
-                    ) from exc
-                data[it_label] = item
-                if self._preempt_requested:
-                    state.request_preempt()
-                observed = self._observed()
-                if observed:
-                    self._emit_entered(label)
-                try:
-                    outcome = state.execute(remapper)
-                except Exception as exc:
-                    raise self._child_error(label, state, exc) from exc
-                if outcome not in registered:
-                    raise self._bad_outcome(label, state, outcome)
-                if observed:
-                    self._emit_exited(label, outcome)
-                self._index += 1
-                if self._preempt_requested and not state._preempt_requested:
-                    # The child serviced our request: stop here. (If it ignored the
-                    # request, it flows on to the next item, as between states.)
-                    self._clear_preempt()
-                    preempted = True
-                    break
-                if outcome in breaks or (loops and outcome not in loops):
-                    break
-                if observed:
-                    self._emit_transition(label, outcome, label)
-            assert outcome is not None
-            final = self._final_outcome_map.get(outcome, outcome)
-            if preempted and final not in self._outcomes:
-                # Stopped on a loop outcome: report the preemption if we can.
-                final = "preempted" if "preempted" in self._outcomes else self._exhausted_outcome
-            if final not in self._outcomes:
-                raise InvalidUserCodeError(
-                    f"{self._path}: the loop ended with {outcome!r}, which maps to no outcome of "
-                    f"the iterator: {', '.join(self._outcomes)}"
-                )
-            if self._observed():
-                self._emit_terminated([label], final)
-            self._end(parent_ud)
-            return final
-        except Exception as exc:
-            self._emit_error(exc)
-            raise
-        finally:
-            self._is_running = False
-            self._after_run()
+            data[it_label] = item
+            if self._preempt_requested:
+                state.request_preempt()
+            observed = bus.listeners or self._local
+            if observed:
+                self._emit_entered(label, thread)  # (and the log line, if wanted)
+            elif log:
+                self._log_entered(label)
+            try:
+                outcome = state.execute(remapper)
+            except Exception as exc:
+                raise self._child_error(label, state, exc) from exc
+            if outcome not in registered:
+                raise self._bad_outcome(label, state, outcome)
+            if observed:
+                self._emit_exited(label, outcome, thread)
+            self._index += 1
+            if self._preempt_requested and not state._preempt_requested:
+                # The child serviced our request: stop here. (If it ignored the
+                # request, it flows on to the next item, as between states.)
+                self._clear_preempt()
+                preempted = True
+                break
+            if outcome in breaks or (loops and outcome not in loops):
+                break
+            if observed:
+                self._emit_transition(label, outcome, label, thread)
+        assert outcome is not None
+        final = self._final_outcome_map.get(outcome, outcome)
+        if preempted and final not in self._outcomes:
+            # Stopped on a loop outcome: report the preemption if we can.
+            final = "preempted" if "preempted" in self._outcomes else self._exhausted_outcome
+        if final not in self._outcomes:
+            raise InvalidUserCodeError(
+                f"{self._path}: the loop ended with {outcome!r}, which maps to no outcome of "
+                f"the iterator: {', '.join(self._outcomes)}"
+            )
+        return final
 
     def request_preempt(self) -> None:
         super().request_preempt()
-        if self._is_running and self._state is not None:
+        if self._running and self._state is not None:
             self._state.request_preempt()
 
     # -- introspection ---------------------------------------------------------------------------
@@ -236,7 +224,7 @@ class Iterator(Container):
         return [self._state_label] if self._state_label is not None else []
 
     def get_active_states(self) -> list[str]:
-        return [self._state_label] if self._is_running and self._state_label else []
+        return [self._state_label] if self._running and self._state_label else []
 
     def get_internal_edges(self) -> list[tuple[str, str, str | None]]:
         label = self._state_label
@@ -246,13 +234,8 @@ class Iterator(Container):
         edges += [(o, label, self._final_outcome_map.get(o, o)) for o in self._break_outcomes]
         return edges
 
-    def is_running(self) -> bool:
-        return self._is_running
+    def _log_entered(self, label: str) -> None:
+        smach.loginfo(f"Iterating item {self._index} of {self._path}")
 
-    def _log_event(self, event: Any) -> None:
-        from smach.introspection.events import StateEntered
-
-        if isinstance(event, StateEntered):
-            __import__("smach").loginfo(f"Iterating item {self._index} of {self._path}")
-        else:
-            super()._log_event(event)
+    def _log_transition(self, source: str, outcome: str, target: str) -> None:
+        """No line per loop: the item's line says it (as in the original SMACH)."""

@@ -80,8 +80,8 @@ class StateMachine(Container):
         self._current_slot: _Slot | None = None
         self._preempted_state: State | None = None
         self._preempt_lock = threading.Lock()
-        self._is_running = False
         self._slots: dict[str, _Slot] | None = None
+        self._last_label = ""
         self._last_outcome: str | None = None
 
     # -- construction ------------------------------------------------------------------------
@@ -159,7 +159,7 @@ class StateMachine(Container):
         self._last_added_label = label
         if self._initial_state_label is None:
             self._initial_state_label = label
-        self._slots = None
+        self._invalidate()
         return state
 
     def check_state_spec(
@@ -189,12 +189,9 @@ class StateMachine(Container):
                 f"{self._path}: a StateMachine has exactly one initial state, got {labels}"
             )
         self._initial_state_label = labels[0]
-        self._slots = None
+        self._invalidate()
         if userdata is not None:
             self._userdata.update(userdata)
-
-    def _invalidate(self) -> None:
-        self._slots = None
 
     # -- validation ----------------------------------------------------------------------------
     def consistency_problems(self) -> list[str]:
@@ -236,8 +233,7 @@ class StateMachine(Container):
                     )
         return problems
 
-    def _compile(self) -> dict[str, _Slot]:
-        self._check_before_run()
+    def _compile(self) -> None:
         slots = {
             label: _Slot(
                 label,
@@ -257,36 +253,27 @@ class StateMachine(Container):
                 else:
                     slot.next[outcome] = target
         self._slots = slots
-        return slots
 
     # -- execution -------------------------------------------------------------------------------
-    def execute(self, parent_ud: UserData | None = None) -> str | None:
-        """Run the machine from its initial state; return the container outcome.
-
-        Returns ``None`` if ``smach.is_shutdown()`` becomes true.
-        """
-        slots = self._slots if self._slots is not None else self._compile()
-        if self._is_running:
-            raise InvalidStateError(f"{self._path} is already running (in another thread?)")
-        self._is_running = True
+    def _run(self) -> str | None:
+        """The transition loop: run the current state, follow its outcome's transition."""
+        slots = self._slots
+        assert slots is not None and self._initial_state_label is not None
+        slot = slots[self._initial_state_label]
         label = ""
         # With capture listeners only, the state_exited + transition of a step are held
         # until the next state is entered (nothing else happens in between in this
         # thread) and the three go out in one call; anything else releases them first.
         held: Capture | None = None  # the state_exited; held_move: the transition
         held_move: Capture = ()
+        bus = self._bus
+        # Read once per run: the thread's name (set by execute() when somebody
+        # listens; every event of this loop is emitted from it) and whether INFO lines
+        # are wanted (decided once per top-level run).
+        thread = self._thread
+        log = self._log_info
+        self._preempted_state = None
         try:
-            self._begin(parent_ud)
-            self._preempted_state = None
-            assert self._initial_state_label is not None
-            slot = slots[self._initial_state_label]
-            bus = self._bus
-            # The name of the thread running this machine, read once per run (when
-            # somebody listens): every event of this loop is emitted from it.
-            thread: str | None = None
-            if bus.listeners or self._local:
-                thread = threading.current_thread().name
-                self._emit_started([slot.label], thread)
             if smach.is_shutdown is not _never and smach.is_shutdown():
                 return None
             while True:
@@ -335,7 +322,8 @@ class StateMachine(Container):
                     if outcome is None and smach.is_shutdown():
                         return None
                     raise self._missing_transition(slot, outcome) from None
-                if isinstance(target, _Slot):
+                if target.__class__ is _Slot:
+                    assert isinstance(target, _Slot)
                     if observed:
                         if bus.event_listeners or self._local:
                             self._emit_step(slot, outcome, target, thread)
@@ -351,6 +339,10 @@ class StateMachine(Container):
                                 outcome,
                                 target.label,
                             )
+                    if log:
+                        smach.loginfo(
+                            f"State machine transitioning '{label}':'{outcome}'-->'{target.label}'"
+                        )
                     # The default check never says yes; skip the call unless replaced.
                     if smach.is_shutdown is not _never and smach.is_shutdown():
                         if held is not None:
@@ -364,26 +356,21 @@ class StateMachine(Container):
                 if observed:
                     self._emit_exited(label, outcome, thread)
                 break
-            final = target
+            self._last_label = label
             self._last_outcome = outcome
             if self._preempt_requested and not slot.state._preempt_requested:
                 self.service_preempt()
-            self._current_slot = None
-            if bus.listeners or self._local:
-                self._emit_terminated([label], final, thread)
-            if parent_ud is not None and self._output_keys:
-                self._copy_output_keys(parent_ud)
-            return final
-        except Exception as exc:
+            # Not a slot, so a container outcome (a str).
+            return target  # type: ignore[return-value]
+        except BaseException:
             if held is not None:
                 self._release((held, held_move))
-            self._emit_error(exc)
             raise
         finally:
             self._current_slot = None
-            self._is_running = False
-            if self._bus.preempt_seen:
-                self._after_run()
+
+    def _terminal_states(self) -> list[str]:
+        return [self._last_label]
 
     def _release(self, held: tuple[Capture, Capture]) -> None:
         """Send a held state_exited + transition pair to the capture listeners."""
@@ -433,7 +420,8 @@ class StateMachine(Container):
 
     def _adopt(self, bus: EventBus, path: str) -> None:
         super()._adopt(bus, path)
-        self._slots = None  # they hold the children's paths
+        for slot in (self._slots or {}).values():  # they hold the children's paths
+            slot.path = f"{path}/{slot.label}"
 
     def _missing_transition(self, slot: _Slot, outcome: object) -> InvalidUserCodeError:
         if outcome in slot.state.get_registered_outcomes():
@@ -504,23 +492,16 @@ class StateMachine(Container):
             for outcome, target in table.items()
         ]
 
-    def is_running(self) -> bool:
-        return self._is_running
+    def _log_started(self, initial_states: Sequence[str]) -> None:
+        smach.loginfo(
+            f"State machine starting in initial state '{initial_states[0]}' with "
+            f"userdata: \n\t{list(self._userdata.keys())}"
+        )
 
-    def _log_event(self, event: Any) -> None:
-        from smach.introspection.events import ContainerStarted, ContainerTerminated, Transition
+    def _log_transition(self, source: str, outcome: str, target: str) -> None:
+        smach.loginfo(f"State machine transitioning '{source}':'{outcome}'-->'{target}'")
 
-        if isinstance(event, ContainerStarted):
-            smach.loginfo(
-                f"State machine starting in initial state '{event.initial_states[0]}' with "
-                f"userdata: \n\t{list(self._userdata.keys())}"
-            )
-        elif isinstance(event, Transition):
-            smach.loginfo(
-                f"State machine transitioning '{event.source}':'{event.outcome}'-->'{event.target}'"
-            )
-        elif isinstance(event, ContainerTerminated):
-            smach.loginfo(
-                f"State machine terminating '{event.terminal_states[0]}':'{self._last_outcome}':"
-                f"'{event.outcome}'"
-            )
+    def _log_terminated(self, terminal_states: Sequence[str], outcome: str | None) -> None:
+        smach.loginfo(
+            f"State machine terminating '{terminal_states[0]}':'{self._last_outcome}':'{outcome}'"
+        )

@@ -47,7 +47,6 @@ class Wrapper(Container):
         self._child: State | None = None
         self._remapping: dict[str, str] = {}
         self._remapper_cache: Remapper | None = None
-        self._running = False
 
     # -- construction ---------------------------------------------------------------------
     @construction_method
@@ -67,7 +66,7 @@ class Wrapper(Container):
             remap = self._remapping
             self.register_input_keys([remap.get(k, k) for k in state.get_registered_input_keys()])
             self.register_output_keys([remap.get(k, k) for k in state.get_registered_output_keys()])
-        self._remapper_cache = None
+        self._invalidate()
         return state
 
     @classmethod
@@ -82,9 +81,6 @@ class Wrapper(Container):
         container = cls(**options)
         container.add(label, state, remapping)
         return container
-
-    def _invalidate(self) -> None:
-        self._remapper_cache = None
 
     def consistency_problems(self) -> list[str]:
         """Every reason the container cannot run (a subclass may add its own)."""
@@ -123,38 +119,22 @@ class Wrapper(Container):
             self._emit_exited(label, outcome)
         return outcome
 
-    def execute(self, parent_ud: UserData | None = None) -> str | None:
-        if self._remapper_cache is None:
-            self._check_before_run()
-            assert self._child is not None and self._label is not None
-            self._remapper_cache = self._remapper(self._label, self._child, self._remapping)
+    def _compile(self) -> None:
+        assert self._child is not None and self._label is not None
+        self._remapper_cache = self._remapper(self._label, self._child, self._remapping)
+
+    def _run(self) -> str | None:
         child, label = self._child, self._label
         assert child is not None and label is not None
-        if self._running:
-            raise InvalidStateError(f"{self._path} is already running (in another thread?)")
-        self._running = True
-        try:
-            self._begin(parent_ud)
-            if self._observed():
-                self._emit_started([label])
-            outcome = self.run(child, label)
-            if self._preempt_requested and not child._preempt_requested:
-                self.service_preempt()  # the child handled the request on our behalf
-            if outcome not in self._outcomes:
-                raise InvalidTransitionError(
-                    f"{self._path}: {type(self).__name__}.run returned {outcome!r}; outcomes: "
-                    f"{', '.join(self._outcomes)}"
-                )
-            if self._observed():
-                self._emit_terminated([label], outcome)
-            self._end(parent_ud)
-            return outcome
-        except Exception as exc:
-            self._emit_error(exc)
-            raise
-        finally:
-            self._running = False
-            self._after_run()
+        outcome = self.run(child, label)
+        if self._preempt_requested and not child._preempt_requested:
+            self.service_preempt()  # the child handled the request on our behalf
+        if outcome not in self._outcomes:
+            raise InvalidTransitionError(
+                f"{self._path}: {type(self).__name__}.run returned {outcome!r}; outcomes: "
+                f"{', '.join(self._outcomes)}"
+            )
+        return outcome
 
     def request_preempt(self) -> None:
         super().request_preempt()
@@ -183,6 +163,3 @@ class Wrapper(Container):
         if self._child is None or self._label is None:
             return []
         return [(o, self._label, o) for o in self._child.get_registered_outcomes()]
-
-    def is_running(self) -> bool:
-        return self._running

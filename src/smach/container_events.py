@@ -1,0 +1,286 @@
+"""What a container reports while it runs: events, SMACH callbacks and INFO log lines.
+
+:class:`ContainerEvents` is the part of :class:`~smach.container.Container` that talks
+to watchers. Three audiences, each paid for only when present:
+
+* capture listeners (journal, viewer) get plain tuples, ordinary listeners and the
+  SMACH start/transition/termination callbacks get :class:`Event` objects; an event
+  is built only when one of them is attached;
+* INFO log lines (the original SMACH strings) are formatted only when a run found
+  somebody who reads them (custom loggers installed, or the ``smach`` Python logger
+  enabled for INFO; decided once per top-level run in ``Container._begin``). They do
+  not go through events: a container with loggers and no listener builds no event.
+
+Every ``_emit_*`` method does both: it sends the event to whoever listens and writes
+the log line if lines are wanted. Callers test :meth:`ContainerEvents._observed`
+first, so an unwatched run pays one attribute test per step.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable, Sequence
+from typing import Any, ClassVar
+
+import smach as _smach
+from smach.introspection.events import (
+    ContainerStarted,
+    ContainerTerminated,
+    ErrorRaised,
+    Event,
+    EventBus,
+    Listener,
+    StateEntered,
+    StateExited,
+    Transition,
+    stamp,
+)
+from smach.user_data import UserData
+
+__all__ = ["ContainerEvents"]
+
+_monotonic = time.monotonic
+_current_thread = threading.current_thread
+
+_Callbacks = list[tuple[Callable[..., Any], tuple[Any, ...]]]
+
+
+class ContainerEvents:
+    """Events, callbacks and log lines of a container (mixed into ``Container``)."""
+
+    #: Which of this container's own events trigger the SMACH transition callbacks.
+    _transition_cb_events: ClassVar[tuple[type[Event], ...]] = (Transition,)
+
+    _bus: EventBus
+    _path: str
+    _userdata: UserData
+    _start_cbs: _Callbacks
+    _transition_cbs: _Callbacks
+    _termination_cbs: _Callbacks
+    # Listeners of this container's own events only (the SMACH callbacks).
+    _local: tuple[Listener, ...]
+    # Whether this run writes INFO log lines (see Container._begin).
+    _log_info: bool
+
+    def get_initial_states(self) -> list[str]:
+        raise NotImplementedError
+
+    def get_active_states(self) -> list[str]:
+        raise NotImplementedError
+
+    # -- listeners and callbacks ------------------------------------------------------------
+    def add_listener(self, listener: Listener) -> None:
+        """Receive every event of the whole tree this container belongs to."""
+        self._bus.add(listener)
+
+    def remove_listener(self, listener: Listener) -> None:
+        self._bus.remove(listener)
+
+    def register_start_cb(self, start_cb: Callable[..., Any], cb_args: Sequence[Any] = ()) -> None:
+        """``start_cb(userdata, initial_states, *cb_args)`` at the start of each run."""
+        self._start_cbs.append((start_cb, tuple(cb_args)))
+        self._refresh_local()
+
+    def register_transition_cb(
+        self, transition_cb: Callable[..., Any], cb_args: Sequence[Any] = ()
+    ) -> None:
+        """``transition_cb(userdata, active_states, *cb_args)`` after each transition."""
+        self._transition_cbs.append((transition_cb, tuple(cb_args)))
+        self._refresh_local()
+
+    def register_termination_cb(
+        self, termination_cb: Callable[..., Any], cb_args: Sequence[Any] = ()
+    ) -> None:
+        """``termination_cb(userdata, terminal_states, outcome, *cb_args)`` at the end."""
+        self._termination_cbs.append((termination_cb, tuple(cb_args)))
+        self._refresh_local()
+
+    def call_start_cbs(self) -> None:
+        self._call_cbs("start", self._start_cbs, (self._userdata, self.get_initial_states()))
+
+    def call_transition_cbs(self) -> None:
+        self._call_cbs(
+            "transition", self._transition_cbs, (self._userdata, self.get_active_states())
+        )
+
+    def call_termination_cbs(self, terminal_states: Sequence[str], outcome: str | None) -> None:
+        self._call_cbs(
+            "termination", self._termination_cbs, (self._userdata, list(terminal_states), outcome)
+        )
+
+    def _call_cbs(self, kind: str, cbs: _Callbacks, args: tuple[Any, ...]) -> None:
+        # Callbacks observe; a failing observer (say, an introspection publisher) must
+        # not abort the robot's task. The error is logged with where it came from, and
+        # the remaining callbacks still run.
+        for cb, extra in cbs:
+            try:
+                cb(*args, *extra)
+            except Exception as exc:
+                _smach.logerr(
+                    f"{self._path}: {kind} callback {getattr(cb, '__qualname__', cb)!r} raised "
+                    f"{type(exc).__name__}: {exc}"
+                )
+
+    def _callbacks_listener(self, event: Event) -> None:
+        if isinstance(event, ContainerStarted):
+            self._call_cbs("start", self._start_cbs, (self._userdata, list(event.initial_states)))
+        elif isinstance(event, self._transition_cb_events):
+            self.call_transition_cbs()
+        elif isinstance(event, ContainerTerminated):
+            self.call_termination_cbs(event.terminal_states, event.outcome)
+
+    def _refresh_local(self) -> None:
+        has_cbs = self._start_cbs or self._transition_cbs or self._termination_cbs
+        self._local = (self._callbacks_listener,) if has_cbs else ()
+
+    # -- INFO log lines (override per container type; called only when lines are wanted) --
+    def _log_started(self, initial_states: Sequence[str]) -> None:
+        _smach.loginfo(f"{type(self).__name__} {self._path} starting in {list(initial_states)}")
+
+    def _log_entered(self, label: str) -> None:
+        """No line by default (the original SMACH wrote none)."""
+
+    def _log_exited(self, label: str, outcome: str | None) -> None:
+        """No line by default (the original SMACH wrote none)."""
+
+    def _log_transition(self, source: str, outcome: str, target: str) -> None:
+        _smach.loginfo(
+            f"{type(self).__name__} {self._path} transitioning '{source}':'{outcome}'-->'{target}'"
+        )
+
+    def _log_terminated(self, terminal_states: Sequence[str], outcome: str | None) -> None:
+        _smach.loginfo(
+            f"{type(self).__name__} {self._path} terminating "
+            f"{list(terminal_states)} with outcome '{outcome}'"
+        )
+
+    # -- emitting --------------------------------------------------------------------------
+    def _observed(self) -> bool:
+        """Whether anybody listens to this container's events or reads its log lines."""
+        return bool(self._bus.listeners or self._local or self._log_info)
+
+    def _emit(self, event: Event) -> None:
+        """Send one of this container's events to the tree's bus and to local listeners."""
+        if self._bus.listeners:
+            self._bus.emit(event)
+        for listener in self._local:
+            listener(event)
+
+    def _deliver(self, event: Event) -> None:
+        """Send an event the capture listeners already got to everybody else."""
+        if self._bus.event_listeners:
+            self._bus.deliver(event)
+        for listener in self._local:
+            listener(event)
+
+    # Capture listeners (journal, viewer) get a tuple; an Event object is built only
+    # when somebody else listens. ``thread`` may be passed by a caller that already
+    # knows it (a run's own thread).
+    def _emit_started(self, initial_states: Sequence[str], thread: str | None = None) -> None:
+        bus = self._bus
+        if bus.listeners or self._local:
+            t = _monotonic()
+            thread = thread or _current_thread().name
+            states, kind = tuple(initial_states), type(self).__name__
+            if bus.sinks:
+                bus.capture((ContainerStarted, self._path, t, thread, kind, states))
+            if bus.event_listeners or self._local:
+                self._deliver(
+                    ContainerStarted(
+                        path=self._path,
+                        time=t,
+                        thread=thread,
+                        container_type=kind,
+                        initial_states=states,
+                    )
+                )
+        if self._log_info:
+            self._log_started(initial_states)
+
+    def _emit_entered(self, label: str, thread: str | None = None) -> None:
+        bus = self._bus
+        if bus.listeners or self._local:
+            t = _monotonic()
+            thread = thread or _current_thread().name
+            path = f"{self._path}/{label}"
+            if bus.sinks:
+                bus.capture((StateEntered, path, t, thread, label))
+            if bus.event_listeners or self._local:
+                self._deliver(StateEntered(path=path, time=t, thread=thread, label=label))
+        if self._log_info:
+            self._log_entered(label)
+
+    def _emit_exited(self, label: str, outcome: str | None, thread: str | None = None) -> None:
+        bus = self._bus
+        if bus.listeners or self._local:
+            t = _monotonic()
+            thread = thread or _current_thread().name
+            path = f"{self._path}/{label}"
+            if bus.sinks:
+                bus.capture((StateExited, path, t, thread, label, outcome))
+            if bus.event_listeners or self._local:
+                self._deliver(
+                    StateExited(path=path, time=t, thread=thread, label=label, outcome=outcome)
+                )
+        if self._log_info:
+            self._log_exited(label, outcome)
+
+    def _emit_transition(
+        self, source: str, outcome: str, target: str, thread: str | None = None
+    ) -> None:
+        bus = self._bus
+        if bus.listeners or self._local:
+            t = _monotonic()
+            thread = thread or _current_thread().name
+            if bus.sinks:
+                bus.capture((Transition, self._path, t, thread, source, outcome, target))
+            if bus.event_listeners or self._local:
+                self._deliver(
+                    Transition(
+                        path=self._path,
+                        time=t,
+                        thread=thread,
+                        source=source,
+                        outcome=outcome,
+                        target=target,
+                    )
+                )
+        if self._log_info:
+            self._log_transition(source, outcome, target)
+
+    def _emit_terminated(
+        self, terminal_states: Sequence[str], outcome: str | None, thread: str | None = None
+    ) -> None:
+        bus = self._bus
+        if bus.listeners or self._local:
+            t = _monotonic()
+            thread = thread or _current_thread().name
+            states = tuple(terminal_states)
+            if bus.sinks:
+                bus.capture((ContainerTerminated, self._path, t, thread, states, outcome))
+            if bus.event_listeners or self._local:
+                self._deliver(
+                    ContainerTerminated(
+                        path=self._path,
+                        time=t,
+                        thread=thread,
+                        terminal_states=states,
+                        outcome=outcome,
+                    )
+                )
+        if self._log_info:
+            self._log_terminated(terminal_states, outcome)
+
+    def _emit_error(self, exc: BaseException) -> None:
+        if self._bus.listeners:
+            t, thread = stamp()
+            self._bus.emit(
+                ErrorRaised(
+                    path=self._path,
+                    time=t,
+                    thread=thread,
+                    error_type=type(exc).__name__,
+                    message=str(exc),
+                )
+            )
