@@ -210,36 +210,30 @@ class Executive(smach.Container):
             compiled.machine.request_preempt()
 
     # -- execution -------------------------------------------------------------------------
-    def execute(self, parent_ud: smach.UserData | None = None) -> str | None:
-        """Run the mission; return succeeded / aborted / preempted."""
-        if self._running:
-            raise smach.InvalidStateError(f"{self.path} is already running")
-        self._running = True
+    def _run(self) -> str | None:
+        """Run the mission; return succeeded / aborted / preempted.
+
+        Called by ``smach.Container.execute``, the run protocol every container shares
+        (input/output keys, started/terminated/error events, preempt bookkeeping).
+        """
         started = time.monotonic()
         self.report = report = ExecutionReport()
         try:
-            self._begin(parent_ud)
-            if self._observed():
-                self._emit_started(["PLAN"])
-            try:
-                outcome = self._mission()
-                report.explanation = report.explanation or "goal reached"
-            except _Stop as stop:
-                outcome, report.explanation = stop.outcome, stop.explanation
-            report.outcome = outcome
-            report.goal_reached = self.model.goal_holds(self.belief.facts)
-            report.total_time_s = time.monotonic() - started
-            report.execution_time_s = max(0.0, report.total_time_s - report.planning_time_s)
-            if self._observed():
-                self._emit_terminated(["PLAN"], outcome)
-            self._end(parent_ud)
-            return outcome
-        except Exception as exc:
-            self._emit_error(exc)
-            raise
-        finally:
-            self._running = False
-            self._after_run()
+            outcome = self._mission()
+            report.explanation = report.explanation or "goal reached"
+        except _Stop as stop:
+            outcome, report.explanation = stop.outcome, stop.explanation
+        report.outcome = outcome
+        report.goal_reached = self.model.goal_holds(self.belief.facts)
+        report.total_time_s = time.monotonic() - started
+        report.execution_time_s = max(0.0, report.total_time_s - report.planning_time_s)
+        return outcome
+
+    def _start_states(self) -> list[str]:
+        return ["PLAN"]
+
+    def _terminal_states(self) -> list[str]:
+        return ["PLAN"]
 
     def _mission(self) -> str:
         resume, self._resume = self._resume, None
