@@ -1,36 +1,32 @@
 """The executive: plan, compile, run, and recover from failures by the policy.
 
 The :class:`Executive` is a ``smach`` container (so it nests in hand-written machines
-and shows up in introspection as ``.../PLAN/03_PICK_CUP_TABLE/SKILL``). On a failed or
-invalid step it decides, in this order, within the policy's budgets:
-
-1. **retry** the step, if its preconditions still hold (bounded per step);
-2. **continue** with the rest of the plan, if it is still valid from the belief
-   (e.g. the step's effects came true anyway);
-3. **repair**: plan only a prefix that re-establishes what the rest of the plan
-   needs (goal regression), then continue with the rest;
-4. **replan** from the belief.
-
-It stops early when the goal already holds. Every decision is an
+and shows up in introspection as ``.../PLAN/03_PICK_CUP_TABLE/SKILL``). It stops early
+when the goal already holds; otherwise it plans (:mod:`.replanner`), runs the compiled
+plan, and after a failed or invalid step follows the recovery ladder of
+:mod:`.repair` (continue, retry, repair, replan, hold) within the policy's budgets
+(:mod:`.policy`). Every decision is an
 :class:`~plan_bridge.execution.events.ExecutiveDecision` event with its reason.
 """
 
 from __future__ import annotations
 
 import bisect
-import dataclasses
 import threading
 import time
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass, field
 from typing import Any
 
 import smach
 from plan_bridge.execution.compile import CompiledPlan, StepRecord, compile_plan
 from plan_bridge.execution.events import ExecutiveDecision, PlanComputed
+from plan_bridge.execution.plan_cache import PlanCache
+from plan_bridge.execution.policy import ExecutionReport, ReplanPolicy
+from plan_bridge.execution.repair import Recovery
+from plan_bridge.execution.replanner import MissionEnded, Replanner
 from plan_bridge.execution.semantics import ActionModel
 from plan_bridge.execution.world import Observation, WorldState, normalise_observations
-from plan_bridge.pddl.task import Fact, PlanningTask, format_fact, parse_fact
+from plan_bridge.pddl.task import PlanningTask, format_fact, parse_fact
 from plan_bridge.planning.planner import Planner, PlanResult, PlanStep, get_planner
 from plan_bridge.skills.registry import SkillRegistry
 from smach.introspection.events import stamp
@@ -38,87 +34,6 @@ from smach.introspection.events import stamp
 __all__ = ["ExecutionReport", "Executive", "ReplanPolicy"]
 
 OUTCOMES = ("succeeded", "aborted", "preempted")
-
-
-@dataclass(frozen=True)
-class ReplanPolicy:
-    """How the executive recovers from failures, and its budgets."""
-
-    max_step_retries: int = 1
-    """Retries of one failed step while its preconditions still hold."""
-    continue_if_valid: bool = True
-    """Skip ahead when the rest of the plan is valid from the belief."""
-    repair: bool = True
-    """Try a repair prefix before a full replan (STRIPS-style plans only)."""
-    repair_max_prefix_ratio: float = 0.5
-    """Keep a repaired plan only if its new prefix is at most this fraction of the
-    plan it rescues: a long detour means the old plan is a poor fit, so replan."""
-    replan: bool = True
-    max_replans: int = 10
-    """Planner calls after the first one (repairs and replans)."""
-    planner_timeout: float = 60.0
-    """Hard limit of one planner call, in seconds."""
-    planning_time_budget: float = 300.0
-    """Total planning time of one execution, in seconds."""
-
-    @classmethod
-    def named(cls, name: str) -> ReplanPolicy:
-        """Preset policies for ablations: full, no-replan, retry-only, replan-only."""
-        presets = {
-            "full": cls(),
-            "repair-first": cls(),
-            "no-replan": cls(
-                max_step_retries=0, continue_if_valid=False, repair=False, replan=False
-            ),
-            "retry-only": cls(
-                continue_if_valid=False, repair=False, replan=False, max_step_retries=3
-            ),
-            "replan-only": cls(max_step_retries=0, continue_if_valid=False, repair=False),
-        }
-        try:
-            return presets[name]
-        except KeyError:
-            raise ValueError(
-                f"unknown replanning policy {name!r}; policies: {', '.join(presets)}"
-            ) from None
-
-
-@dataclass
-class ExecutionReport:
-    """The numbers of one execution (``plan-bridge run --json`` prints them)."""
-
-    outcome: str = ""
-    goal_reached: bool = False
-    actions_executed: int = 0
-    actions_failed: int = 0
-    retries: int = 0
-    continues: int = 0
-    repairs: int = 0
-    repair_attempts: int = 0
-    replans: int = 0
-    planner_calls: int = 0
-    planning_time_s: float = 0.0
-    execution_time_s: float = 0.0
-    total_time_s: float = 0.0
-    final_plan: list[str] = field(default_factory=list)
-    executed: list[str] = field(default_factory=list)
-    decisions: list[dict[str, str]] = field(default_factory=list)
-    explanation: str = ""
-
-    def to_json(self) -> dict[str, Any]:
-        data = dataclasses.asdict(self)
-        for key in ("planning_time_s", "execution_time_s", "total_time_s"):
-            data[key] = round(data[key], 4)
-        return data
-
-
-class _Stop(Exception):  # noqa: N818  (control flow, not an error)
-    """Ends the mission with an outcome and an explanation (internal control flow)."""
-
-    def __init__(self, outcome: str, explanation: str) -> None:
-        super().__init__(explanation)
-        self.outcome = outcome
-        self.explanation = explanation
 
 
 class Executive(smach.Container):
@@ -142,6 +57,7 @@ class Executive(smach.Container):
         input_keys: Iterable[str] = (),
         output_keys: Iterable[str] = (),
         checkpoint: Callable[[dict[str, Any]], None] | None = None,
+        plan_cache: PlanCache | None = None,
     ) -> None:
         super().__init__(list(OUTCOMES), input_keys, output_keys)
         #: Called (from the step's thread) after every succeeded step with the state
@@ -161,8 +77,12 @@ class Executive(smach.Container):
         self.concurrent = concurrent
         self.check_preconditions = check_preconditions
         self.model = ActionModel(task)
+        #: Plans found per (state, goal); share one between executives of the same
+        #: problem to reuse plans across missions (``ReplanPolicy.reuse_plans``).
+        self.plan_cache = plan_cache if plan_cache is not None else PlanCache()
         self.report = ExecutionReport()
         self._compiled: CompiledPlan | None = None
+        self._replanner: Replanner | None = None
         self._running = False
         self._records: dict[int, StepRecord] = {}
 
@@ -221,7 +141,7 @@ class Executive(smach.Container):
         try:
             outcome = self._mission()
             report.explanation = report.explanation or "goal reached"
-        except _Stop as stop:
+        except MissionEnded as stop:
             outcome, report.explanation = stop.outcome, stop.explanation
         report.outcome = outcome
         report.goal_reached = self.model.goal_holds(self.belief.facts)
@@ -239,12 +159,39 @@ class Executive(smach.Container):
         resume, self._resume = self._resume, None
         if resume is not None:
             plan, self._next_label = self._restore(resume)
+        replanner = self._replanner
+        if (
+            replanner is None
+            or replanner.planner is not self.planner
+            or replanner.policy is not self.policy
+            or replanner.cache is not self.plan_cache
+        ):
+            # Kept between runs: its replan portfolio is built once.
+            replanner = self._replanner = Replanner(
+                self.task,
+                self.planner,
+                self.policy,
+                self.model,
+                self.belief,
+                self.plan_cache,
+                self.preempt_event,
+                self._plan_computed,
+            )
+        replanner.start(self.report)
+        recovery = Recovery(
+            self.model, self.policy, self.belief, replanner, self.report, self._decide
+        )
         self._sense()
         if self.model.goal_holds(self.belief.facts):
             self._decide("done", "the goal already holds")
             return "succeeded"
         if resume is None:
-            plan = self._plan("initial plan", self.task)
+            initial = replanner.plan("initial plan")
+            if not initial.solved:
+                raise MissionEnded(
+                    "aborted", f"no plan ({initial.status.value}): {initial.explanation}"
+                )
+            plan = list(initial.actions)
         while True:
             self._check_preempt()
             first = self._next_label
@@ -272,7 +219,7 @@ class Executive(smach.Container):
                     for i, step in enumerate(plan)
                     if i != failed and not self._succeeded(first + i)
                 ]
-            plan = self._recover(rest, reason, record)
+            plan = recovery.recover(rest, reason, record)
 
     def _run_plan(self, plan: list[PlanStep], first_index: int) -> tuple[str, int | None]:
         """Run ``plan``; return (outcome, index in ``plan`` of the first unfinished step)."""
@@ -378,9 +325,12 @@ class Executive(smach.Container):
             "repairs",
             "replans",
             "planner_calls",
+            "plans_reused",
+            "holds",
             "planning_time_s",
         ):
             setattr(report, name, saved.get(name, 0))
+        report.planners_won = dict(saved.get("planners_won", {}))
         report.executed = list(saved.get("executed", []))
         self._executed = [
             (-len(report.executed) + i, step) for i, step in enumerate(report.executed)
@@ -409,119 +359,7 @@ class Executive(smach.Container):
         )
         return f"{step} {record.outcome}{detail}{seen}"
 
-    # -- recovery ----------------------------------------------------------------------------
-    def _recover(
-        self, rest: list[PlanStep], reason: str, record: StepRecord | None
-    ) -> list[PlanStep]:
-        """Choose how to go on from a failure of ``rest[0]`` (or the end of the plan)."""
-        policy = self.policy
-        facts = self.belief.facts
-        if rest:
-            failed = rest[0]
-            # Retries are counted per step of the plan in force (a new plan starts over).
-            key = (self._generation, str(failed))
-            tries = self._retry_counts.get(key, 0)
-            ground = self.model.ground(failed)
-            if (
-                record is not None
-                and record.outcome == "aborted"
-                and tries < policy.max_step_retries
-                and ground.applicable(facts)
-            ):
-                self._retry_counts[key] = tries + 1
-                self.report.retries += 1
-                self._decide("retry", f"{reason}; its preconditions still hold", str(failed))
-                return rest
-            if policy.continue_if_valid and len(rest) > 1:
-                check = self.model.check_plan(rest[1:], facts)
-                if check.valid:
-                    self.report.continues += 1
-                    self._decide(
-                        "continue", f"{reason}; the rest of the plan is still valid", str(failed)
-                    )
-                    return rest[1:]
-        if policy.repair and rest:
-            repaired = self._repair(rest, reason)
-            if repaired is not None:
-                return repaired
-        if policy.replan:
-            self.report.replans += 1
-            self._decide("replan", reason)
-            self._generation += 1
-            return self._plan(f"replan: {reason}", self.task)
-        raise _Stop("aborted", f"{reason}; the policy allows no further recovery")
-
-    def _repair(self, rest: list[PlanStep], reason: str) -> list[PlanStep] | None:
-        """Plan a prefix that re-establishes what ``rest`` needs; None if that does not fit."""
-        needed = self.model.regress(rest)
-        if needed is None:
-            return None
-        facts = self.belief.facts
-        missing = needed - facts
-        if not missing:
-            return None
-        fixed = sorted(f for f in missing if f[0] not in self.model.addable_predicates())
-        if fixed:
-            # No action makes these true (they are observed, like a locked door): the
-            # old plan cannot be rescued, and asking the planner would only cost time.
-            self._decide("repair-skipped", f"no action can re-establish {_show(fixed)}")
-            return None
-        self.report.repair_attempts += 1
-        # The goal atoms travel to the planner, which derives the repair problem from
-        # the task it already parsed (no PDDL is written or parsed).
-        prefix = self._plan(
-            f"repair: re-establish {_show(missing)}", self.task, final=False, goal=needed
-        )
-        if prefix is None:
-            return None
-        candidate = [*prefix, *rest]
-        limit = max(1, int(self.policy.repair_max_prefix_ratio * len(rest)))
-        if not self.model.check_plan(candidate, facts).valid:
-            why = "the repaired plan does not reach the goal"
-        elif len(prefix) > limit:
-            why = (
-                f"the repair needs {len(prefix)} extra steps to rescue {len(rest)} "
-                f"(more than {limit}): a new plan fits better"
-            )
-        else:
-            self.report.repairs += 1
-            self._budgeted_calls += 1
-            self._generation += 1
-            self._decide("repair", f"{reason}; {len(prefix)} steps re-establish {_show(missing)}")
-            return candidate
-        self._decide("repair-rejected", why)
-        return None
-
-    # -- planning ------------------------------------------------------------------------------
-    def _plan(
-        self,
-        reason: str,
-        task: PlanningTask,
-        *,
-        final: bool = True,
-        goal: frozenset[Fact] | None = None,
-    ) -> list[PlanStep]:
-        """Plan from the belief; raise _Stop when the budget or the planner says no."""
-        policy = self.policy
-        report = self.report
-        if final and self._budgeted_calls > policy.max_replans:
-            raise _Stop(
-                "aborted",
-                f"replanning budget exhausted ({policy.max_replans} replans) after: {reason}",
-            )
-        remaining = policy.planning_time_budget - report.planning_time_s
-        if remaining <= 0:
-            raise _Stop(
-                "aborted", f"planning time budget ({policy.planning_time_budget} s) exhausted"
-            )
-        timeout = min(policy.planner_timeout, remaining)
-        result = self._solve(task, timeout, goal)
-        report.planner_calls += 1
-        if final:
-            # Repair attempts are bounded by the failures and the time budget; only
-            # plans that replace the plan in force use up the replanning budget.
-            self._budgeted_calls += 1
-        report.planning_time_s += result.planning_time_s
+    def _plan_computed(self, reason: str, result: PlanResult) -> None:
         if self._observed():
             t, thread = stamp()
             self._emit(
@@ -537,42 +375,6 @@ class Executive(smach.Container):
                     explanation=result.explanation,
                 )
             )
-        if not result.solved:
-            if not final:
-                return None  # type: ignore[return-value]
-            raise _Stop("aborted", f"no plan ({result.status.value}): {result.explanation}")
-        return list(result.actions)
-
-    def _solve(
-        self, task: PlanningTask, timeout: float, goal: frozenset[Fact] | None = None
-    ) -> PlanResult:
-        """Solve in a helper thread so that a preempt request is answered at once."""
-        box: list[PlanResult | BaseException] = []
-        done = threading.Event()
-        facts = self.belief.facts
-
-        def work() -> None:
-            try:
-                if goal is None:
-                    box.append(self.planner.solve(task, timeout=timeout, initial_state=facts))
-                else:
-                    box.append(
-                        self.planner.solve(task, timeout=timeout, initial_state=facts, goal=goal)
-                    )
-            except BaseException as exc:
-                box.append(exc)
-            finally:
-                done.set()
-
-        threading.Thread(target=work, name="plan-bridge-solve", daemon=True).start()
-        event = self.preempt_event
-        while not done.wait(0.05):
-            if event.is_set():
-                raise _Stop("preempted", "preempted while planning")
-        value = box[0]
-        if isinstance(value, BaseException):
-            raise value
-        return value
 
     # -- belief --------------------------------------------------------------------------------
     def _sense(self) -> None:
@@ -583,7 +385,7 @@ class Executive(smach.Container):
 
     def _check_preempt(self) -> None:
         if self._preempt_requested:
-            raise _Stop("preempted", "preempted")
+            raise MissionEnded("preempted", "preempted")
 
     def _decide(self, decision: str, reason: str, step: str = "") -> None:
         self.report.decisions.append({"decision": decision, "reason": reason, "step": step})
@@ -602,12 +404,9 @@ class Executive(smach.Container):
 
     def _begin(self, parent_ud: smach.UserData | None) -> None:
         super()._begin(parent_ud)
-        self._retry_counts: dict[tuple[int, str], int] = {}
-        # Plans adopted so far (retries are counted per plan) and the next step label.
-        self._generation = 0
+        # The next step label, and the succeeded steps in plan order.
         self._next_label = 1
         self._executed = []
-        self._budgeted_calls = 0
 
 
 def _json_values(ud: smach.UserData) -> dict[str, Any]:
@@ -622,8 +421,3 @@ def _json_values(ud: smach.UserData) -> dict[str, Any]:
             continue
         out[key] = ud[key]
     return out
-
-
-def _show(facts: Iterable[Fact]) -> str:
-    shown = sorted(format_fact(f) for f in facts)
-    return ", ".join(shown[:6]) + (f" and {len(shown) - 6} more" if len(shown) > 6 else "")

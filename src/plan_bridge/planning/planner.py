@@ -210,6 +210,11 @@ class UPPlanner:
     def name(self) -> str:
         return self._label
 
+    @property
+    def engine(self) -> str:
+        """The unified-planning engine name (``name`` may be a configuration's label)."""
+        return self._engine
+
     def __repr__(self) -> str:
         extra = f", params={self.params!r}" if self.params else ""
         return f"UPPlanner({self._engine!r}{extra})"

@@ -74,11 +74,15 @@ def test_no_replan_policy_fails_on_the_first_fault(planner) -> None:  # type: ig
 
 
 @pytest.mark.timeout(60)
-def test_replan_budget_bounds_the_planner_calls(planner) -> None:  # type: ignore[no-untyped-def]
-    policy = ReplanPolicy(max_step_retries=0, max_replans=2)
+@pytest.mark.parametrize("reuse", [True, False])
+def test_replan_budget_bounds_the_planner_calls(planner, reuse: bool) -> None:  # type: ignore[no-untyped-def]
+    policy = ReplanPolicy(max_step_retries=0, max_replans=2, reuse_plans=reuse)
     ex, _ = executive(rooms(), planner, fail_rate=1.0, policy=policy)
     assert ex.execute() == "aborted"
-    assert ex.report.planner_calls == 3
+    # Every failure leaves the state as it was: replans from it reuse the first plan.
+    assert ex.report.planner_calls == (1 if reuse else 3)
+    assert ex.report.plans_reused == (2 if reuse else 0)
+    assert ex.report.replans == 2
     assert "budget exhausted" in ex.report.explanation
 
 

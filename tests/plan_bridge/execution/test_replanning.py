@@ -17,6 +17,7 @@ from plan_bridge.pddl.task import PlanningTask, load_task, task_from_problem
 from plan_bridge.pddl.up_runtime import lean_copy
 from plan_bridge.planning.planner import PlanResult, PlanStatus, PlanStep, UPPlanner
 from plan_bridge.planning.worker import ProblemText, WorkerPool
+from smach.testing import EventRecorder
 
 
 def _assert_valid_plan(task: PlanningTask, result: PlanResult) -> None:
@@ -253,3 +254,172 @@ def test_replan_only_policy_replans_from_the_belief_after_one_failure(bench: Pat
     assert executive.execute() == "succeeded"
     assert executive.report.replans == 1 and executive.report.planner_calls == 2
     assert plans[1].reason.startswith("replan")
+
+
+# -- the recovery ladder: held plans, plan reuse, replan deadlines ---------------------------
+
+ROOMS = Path(__file__).parents[1] / "data" / "rooms"
+
+
+class FirstPlanOnly:
+    """A planner that plans once (through Fast Downward), then answers every later
+    solve with ``status`` (a replan that times out, or errs), recording timeouts."""
+
+    def __init__(self, status: PlanStatus = PlanStatus.TIMEOUT) -> None:
+        self.inner = UPPlanner("fast-downward")
+        self.status = status
+        self.timeouts: list[float] = []
+
+    @property
+    def name(self) -> str:
+        return "first-plan-only"
+
+    def solve(self, task: PlanningTask, *, timeout: float, **kwargs: object) -> PlanResult:
+        self.timeouts.append(timeout)
+        if len(self.timeouts) == 1:
+            return self.inner.solve(task, timeout=timeout, **kwargs)  # type: ignore[arg-type]
+        return PlanResult(
+            self.status,
+            planner=self.name,
+            planning_time_s=0.01,
+            explanation=f"no plan within the {timeout:g} s limit",
+        )
+
+
+def _failing(world: SimulatedWorld, action: str, times: int) -> list[PlanStep]:
+    """Make the first ``times`` tries of ``action`` fail without an effect."""
+    original = world.perform
+    failed: list[PlanStep] = []
+
+    def perform(step: PlanStep):  # type: ignore[no-untyped-def]
+        if step.action == action and len(failed) < times:
+            failed.append(step)
+            return False, []
+        return original(step)
+
+    world.perform = perform  # type: ignore[method-assign]
+    return failed
+
+
+def _rooms() -> PlanningTask:
+    return load_task(ROOMS / "domain.pddl", ROOMS / "problems" / "p01.pddl")
+
+
+@pytest.mark.timeout(60)
+def test_a_replan_that_times_out_goes_on_with_the_held_plan_to_the_goal() -> None:
+    task = _rooms()
+    world = SimulatedWorld(task)
+    failed = _failing(world, "pick", 3)  # one more than the two retries
+    planner = FirstPlanOnly(PlanStatus.TIMEOUT)
+    executive = Executive(task, symbolic_skills(world), planner)
+    assert executive.execute() == "succeeded"
+    report = executive.report
+    assert len(failed) == 3 and report.retries == 2
+    assert report.replans == 1 and report.holds == 1
+    assert report.goal_reached and world.goal_reached()
+    hold = next(d for d in report.decisions if d["decision"] == "hold")
+    assert hold["reason"].startswith("no plan (timeout)") and "still valid" in hold["reason"]
+    assert hold["step"] == "(pick robot1 cup kitchen)"
+
+
+@pytest.mark.timeout(60)
+def test_without_holding_the_same_timeout_aborts_the_mission() -> None:
+    task = _rooms()
+    world = SimulatedWorld(task)
+    _failing(world, "pick", 3)
+    policy = ReplanPolicy(hold_valid_plan=False)
+    executive = Executive(task, symbolic_skills(world), FirstPlanOnly(), policy=policy)
+    assert executive.execute() == "aborted"
+    assert executive.report.explanation.startswith("no plan (timeout)")
+
+
+@pytest.mark.timeout(60)
+def test_a_failed_replan_is_not_held_when_the_held_plan_broke() -> None:
+    task = _rooms()
+    world = SimulatedWorld(task)
+    original = world.perform
+
+    def perform(step: PlanStep):  # type: ignore[no-untyped-def]
+        if step.action == "pick":
+            # The cup is gone: the rest of the plan cannot work any more.
+            with world._lock:
+                world._facts.discard(("item-at", "cup", "kitchen"))
+            return False, [(("item-at", "cup", "kitchen"), False)]
+        return original(step)
+
+    world.perform = perform  # type: ignore[method-assign]
+    executive = Executive(task, symbolic_skills(world), FirstPlanOnly(PlanStatus.ERROR))
+    assert executive.execute() == "aborted"
+    assert executive.report.holds == 0
+    assert executive.report.explanation.startswith("no plan (error)")
+
+
+@pytest.mark.timeout(60)
+def test_a_replan_gets_its_own_deadline() -> None:
+    task = _rooms()
+    world = SimulatedWorld(task)
+    _failing(world, "pick", 3)
+    planner = FirstPlanOnly()
+    policy = ReplanPolicy(planner_timeout=40.0, replan_timeout=7.5)
+    executive = Executive(task, symbolic_skills(world), planner, policy=policy)
+    assert executive.execute() == "succeeded"
+    assert planner.timeouts == [40.0, 7.5]
+
+
+@pytest.mark.timeout(60)
+def test_retries_go_on_while_the_held_plan_is_valid_without_calling_the_planner() -> None:
+    task = _rooms()
+    world = SimulatedWorld(task)
+    _failing(world, "pick", 2)
+    planner = FirstPlanOnly()
+    executive = Executive(task, symbolic_skills(world), planner)
+    assert executive.execute() == "succeeded"
+    assert executive.report.retries == 2
+    assert executive.report.planner_calls == 1 and executive.report.replans == 0
+
+
+@pytest.mark.timeout(60)
+def test_a_shared_plan_cache_reuses_the_plan_of_an_identical_state_and_goal() -> None:
+    from plan_bridge.execution.plan_cache import PlanCache
+
+    cache = PlanCache()
+    reports = []
+    for _ in range(2):
+        task = _rooms()  # loaded again: same text, a new task object
+        world = SimulatedWorld(task)
+        executive = Executive(task, symbolic_skills(world), "fast-downward", plan_cache=cache)
+        recorder = EventRecorder()
+        executive.add_listener(recorder)
+        assert executive.execute() == "succeeded"
+        plans = [e for e in recorder.events if isinstance(e, PlanComputed)]
+        reports.append((executive.report, plans))
+    (first, _), (second, plans) = reports
+    assert first.planner_calls == 1 and first.plans_reused == 0
+    assert second.planner_calls == 0 and second.plans_reused == 1
+    assert second.final_plan == first.final_plan
+    assert "plan reused" in plans[0].reason and second.planning_time_s == 0.0
+    assert cache.hits == 1
+
+
+@pytest.mark.timeout(60)
+def test_the_json_report_counts_planner_calls_reuses_and_holds() -> None:
+    task = _rooms()
+    world = SimulatedWorld(task)
+    _failing(world, "pick", 3)
+    executive = Executive(task, symbolic_skills(world), FirstPlanOnly())
+    executive.execute()
+    data = executive.report.to_json()
+    assert {k: data[k] for k in ("planner_calls", "replans", "holds", "plans_reused")} == {
+        "planner_calls": 2,
+        "replans": 1,
+        "holds": 1,
+        "plans_reused": 0,
+    }
+    assert data["planners_won"] == {"fast-downward": 1}
+
+
+def test_policies_refuse_bad_budgets_and_unknown_configurations() -> None:
+    with pytest.raises(ValueError, match="replan_timeout must be > 0"):
+        ReplanPolicy(replan_timeout=0)
+    with pytest.raises(ValueError, match="unknown configuration"):
+        ReplanPolicy(replan_portfolio=("fastest",))

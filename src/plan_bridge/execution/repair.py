@@ -1,0 +1,167 @@
+"""The recovery ladder: what the executive does after a step failed or the plan ended
+without the goal.
+
+In order, within the policy's budgets:
+
+1. **continue** with the rest of the plan if it is valid from the belief without the
+   failed step (its effects came true anyway, e.g. a door somebody else opened);
+2. **retry** the step while the held plan, that step included, is still valid from
+   the belief (a fault that left the world as it was: no planner can do better than
+   the plan in force), at most ``max_step_retries`` times per step and plan;
+3. **repair** (STRIPS-style plans): regress the goal through the rest of the plan to
+   the facts it needs, plan only a prefix that re-establishes the broken ones, and
+   keep ``prefix + rest`` if it is valid and short;
+4. **replan** from the belief (a reused plan for a state seen before, else the replan
+   portfolio within the replan deadline). When that gives no plan while the held
+   plan is still valid from the belief, **hold**: go on with the held plan instead of
+   aborting (the planner's time-out says nothing against a plan that still works).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+
+from plan_bridge.execution.compile import StepRecord
+from plan_bridge.execution.policy import ExecutionReport, ReplanPolicy
+from plan_bridge.execution.replanner import MissionEnded, Replanner
+from plan_bridge.execution.semantics import ActionModel
+from plan_bridge.execution.world import WorldState
+from plan_bridge.pddl.task import Fact, format_fact
+from plan_bridge.planning.planner import PlanStep
+
+__all__ = ["Recovery"]
+
+Decide = Callable[[str, str, str], None]
+
+
+class Recovery:
+    """Chooses how to go on after a failure (one instance per execution)."""
+
+    def __init__(
+        self,
+        model: ActionModel,
+        policy: ReplanPolicy,
+        belief: WorldState,
+        replanner: Replanner,
+        report: ExecutionReport,
+        decide: Decide,
+    ) -> None:
+        self.model = model
+        self.policy = policy
+        self.belief = belief
+        self.replanner = replanner
+        self.report = report
+        self.decide = decide
+        #: Plans adopted so far: retries are counted per step of the plan in force.
+        self.generation = 0
+        self._retry_counts: dict[tuple[int, str], int] = {}
+
+    def recover(
+        self, rest: list[PlanStep], reason: str, record: StepRecord | None
+    ) -> list[PlanStep]:
+        """The plan to go on with after a failure of ``rest[0]`` (or the end of the
+        plan, when ``rest`` is empty); raises :class:`MissionEnded` to stop."""
+        policy, report = self.policy, self.report
+        facts = self.belief.facts
+        held_valid = bool(rest) and self.model.check_plan(rest, facts).valid
+        if rest:
+            failed = rest[0]
+            if (
+                policy.continue_if_valid
+                and len(rest) > 1
+                and self.model.check_plan(rest[1:], facts).valid
+            ):
+                report.continues += 1
+                self.decide(
+                    "continue", f"{reason}; the rest of the plan is still valid", str(failed)
+                )
+                return rest[1:]
+            key = (self.generation, str(failed))
+            tries = self._retry_counts.get(key, 0)
+            if (
+                record is not None
+                and record.outcome == "aborted"
+                and tries < policy.max_step_retries
+                and held_valid
+            ):
+                self._retry_counts[key] = tries + 1
+                report.retries += 1
+                self.decide(
+                    "retry", f"{reason}; the plan, this step included, is still valid", str(failed)
+                )
+                return rest
+            if policy.repair:
+                repaired = self._repair(rest, reason)
+                if repaired is not None:
+                    return repaired
+        if not policy.replan:
+            raise MissionEnded("aborted", f"{reason}; the policy allows no further recovery")
+        self.decide("replan", reason, "")
+        result = self.replanner.plan(f"replan: {reason}", replan=True)
+        report.replans += 1  # counted once the budget allowed it
+        self.generation += 1
+        if result.solved:
+            return list(result.actions)
+        no_plan = f"no plan ({result.status.value}): {result.explanation}"
+        if (
+            policy.hold_valid_plan
+            and held_valid
+            and self.model.check_plan(rest, self.belief.facts).valid
+        ):
+            report.holds += 1
+            self.decide(
+                "hold",
+                f"{no_plan}; the held plan ({len(rest)} steps) is still valid from the belief: "
+                "going on with it",
+                str(rest[0]),
+            )
+            return rest
+        raise MissionEnded("aborted", no_plan)
+
+    def _repair(self, rest: list[PlanStep], reason: str) -> list[PlanStep] | None:
+        """Plan a prefix that re-establishes what ``rest`` needs; None if that does not fit."""
+        needed = self.model.regress(rest)
+        if needed is None:
+            return None
+        facts = self.belief.facts
+        missing = needed - facts
+        if not missing:
+            return None
+        fixed = sorted(f for f in missing if f[0] not in self.model.addable_predicates())
+        if fixed:
+            # No action makes these true (they are observed, like a locked door): the
+            # old plan cannot be rescued, and asking the planner would only cost time.
+            self.decide("repair-skipped", f"no action can re-establish {show(fixed)}", "")
+            return None
+        self.report.repair_attempts += 1
+        # The goal atoms travel to the planner, which derives the repair problem from
+        # the task it already parsed (no PDDL is written or parsed).
+        result = self.replanner.plan(
+            f"repair: re-establish {show(missing)}", final=False, goal=needed
+        )
+        if not result.solved:
+            return None
+        prefix = list(result.actions)
+        candidate = [*prefix, *rest]
+        limit = max(1, int(self.policy.repair_max_prefix_ratio * len(rest)))
+        if not self.model.check_plan(candidate, facts).valid:
+            why = "the repaired plan does not reach the goal"
+        elif len(prefix) > limit:
+            why = (
+                f"the repair needs {len(prefix)} extra steps to rescue {len(rest)} "
+                f"(more than {limit}): a new plan fits better"
+            )
+        else:
+            self.report.repairs += 1
+            self.replanner.budgeted_calls += 1
+            self.generation += 1
+            self.decide("repair", f"{reason}; {len(prefix)} steps re-establish {show(missing)}", "")
+            return candidate
+        self.decide("repair-rejected", why, "")
+        return None
+
+
+def show(facts: Iterable[Fact]) -> str:
+    """Facts as PDDL text, at most six of them."""
+    shown = sorted(format_fact(f) for f in facts)
+    return ", ".join(shown[:6]) + (f" and {len(shown) - 6} more" if len(shown) > 6 else "")

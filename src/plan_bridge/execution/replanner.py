@@ -1,0 +1,200 @@
+"""Where the executive's plans come from: the planner calls of one execution.
+
+A :class:`Replanner` asks the planner for the initial plan and for repairs and
+replans, within the policy's budgets (planner calls, planning time, a replan's own
+deadline). Before calling a planner it looks up the plan found before for the same
+(state, goal) in a :class:`~plan_bridge.execution.plan_cache.PlanCache`; a replan
+goes to a portfolio of Fast Downward configurations (:mod:`.portfolio`) when the
+executive's planner is Fast Downward. Every solve runs in a helper thread, so that
+a preempt request is answered at once (and kills the planner process).
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable, Sequence
+
+from plan_bridge.execution.plan_cache import PlanCache
+from plan_bridge.execution.policy import ExecutionReport, ReplanPolicy
+from plan_bridge.execution.portfolio import PlannerPortfolio, fast_downward_portfolio
+from plan_bridge.execution.semantics import ActionModel
+from plan_bridge.execution.world import WorldState
+from plan_bridge.pddl.task import Fact, PlanningTask
+from plan_bridge.planning.planner import Planner, PlanResult, PlanStatus, PlanStep, UPPlanner
+
+__all__ = ["MissionEnded", "Replanner"]
+
+
+class MissionEnded(Exception):  # noqa: N818  (control flow, not an error)
+    """Ends the mission with an outcome and an explanation (internal control flow)."""
+
+    def __init__(self, outcome: str, explanation: str) -> None:
+        super().__init__(explanation)
+        self.outcome = outcome
+        self.explanation = explanation
+
+
+class Replanner:
+    """The planner calls of one execution (see the module docstring)."""
+
+    def __init__(
+        self,
+        task: PlanningTask,
+        planner: Planner,
+        policy: ReplanPolicy,
+        model: ActionModel,
+        belief: WorldState,
+        cache: PlanCache,
+        preempt: threading.Event,
+        on_plan: Callable[[str, PlanResult], None],
+    ) -> None:
+        self.task = task
+        self.planner = planner
+        self.policy = policy
+        self.model = model
+        self.belief = belief
+        self.cache = cache
+        self.preempt = preempt
+        self.on_plan = on_plan
+        self.report = ExecutionReport()
+        #: Plans that replaced the plan in force, after the first one.
+        self.budgeted_calls = 0
+        self._replan_planner: Planner | None = None
+
+    @property
+    def replan_planner(self) -> Planner:
+        """The planner of replans: the portfolio, built on the first replan."""
+        if self._replan_planner is None:
+            self._replan_planner = self._build_replan_planner()
+        return self._replan_planner
+
+    def _build_replan_planner(self) -> Planner:
+        planner = self.planner
+        names = self.policy.replan_portfolio
+        if names and isinstance(planner, UPPlanner) and planner.engine == "fast-downward":
+            portfolio = fast_downward_portfolio(names, pool=planner.pool, first=planner)
+            if len(portfolio.members) > 1:
+                return portfolio
+        return planner
+
+    def start(self, report: ExecutionReport) -> None:
+        """Begin an execution that reports into ``report``."""
+        self.report = report
+        self.budgeted_calls = 0
+
+    def plan(
+        self,
+        reason: str,
+        *,
+        final: bool = True,
+        replan: bool = False,
+        goal: frozenset[Fact] | None = None,
+    ) -> PlanResult:
+        """A plan from the belief (``goal``: these atoms instead of the task's goal).
+
+        ``final`` plans replace the plan in force and use up the replanning budget;
+        ``replan`` ones get the policy's replan deadline and portfolio. Raises
+        :class:`MissionEnded` when a budget is exhausted or a preempt arrives; "no plan"
+        is a result, for the caller to decide on.
+        """
+        policy, report = self.policy, self.report
+        if final and self.budgeted_calls > policy.max_replans:
+            raise MissionEnded(
+                "aborted",
+                f"replanning budget exhausted ({policy.max_replans} replans) after: {reason}",
+            )
+        facts = self.belief.facts
+        if policy.reuse_plans:
+            reused = self._reuse(facts, goal)
+            if reused is not None:
+                report.plans_reused += 1
+                if final:
+                    self.budgeted_calls += 1
+                self.on_plan(f"{reason} (plan reused: same state and goal)", reused)
+                return reused
+        remaining = policy.planning_time_budget - report.planning_time_s
+        if remaining <= 0:
+            raise MissionEnded(
+                "aborted", f"planning time budget ({policy.planning_time_budget} s) exhausted"
+            )
+        timeout = min(policy.planner_timeout, remaining)
+        planner = self.planner
+        if replan:
+            timeout = min(timeout, policy.replan_timeout)
+            planner = self.replan_planner
+        result = self._solve(planner, facts, timeout, goal)
+        report.planner_calls += 1
+        if final:
+            self.budgeted_calls += 1
+        report.planning_time_s += result.planning_time_s
+        if result.solved:
+            report.planners_won[result.planner] = report.planners_won.get(result.planner, 0) + 1
+            if policy.reuse_plans:
+                self.cache.put(self.task, facts, goal, result.actions, result.planner)
+        self.on_plan(reason, result)
+        return result
+
+    def _reuse(self, facts: frozenset[Fact], goal: frozenset[Fact] | None) -> PlanResult | None:
+        hit = self.cache.get(self.task, facts, goal)
+        if hit is None:
+            return None
+        steps, planner = hit
+        if not self._reaches(steps, facts, goal):
+            return None  # defensive: a plan that does not fit is planned afresh
+        return PlanResult(PlanStatus.SOLVED, steps, planner=planner)
+
+    def _reaches(
+        self, steps: Sequence[PlanStep], facts: frozenset[Fact], goal: frozenset[Fact] | None
+    ) -> bool:
+        if goal is None:
+            return self.model.check_plan(steps, facts).valid
+        state = set(facts)
+        for step in steps:
+            ground = self.model.ground(step)
+            if not ground.applicable(state):
+                return False
+            adds, dels = ground.effects(state)
+            state -= dels
+            state |= adds
+        return goal <= state
+
+    def _solve(
+        self,
+        planner: Planner,
+        facts: frozenset[Fact],
+        timeout: float,
+        goal: frozenset[Fact] | None,
+    ) -> PlanResult:
+        """Solve in a helper thread so that a preempt request is answered at once."""
+        box: list[PlanResult | BaseException] = []
+        done = threading.Event()
+        task, cancel = self.task, self.preempt
+
+        def work() -> None:
+            try:
+                if isinstance(planner, (UPPlanner, PlannerPortfolio)):
+                    # The preempt event cancels the solve: its process is killed.
+                    box.append(
+                        planner.solve(
+                            task, timeout=timeout, initial_state=facts, goal=goal, cancel=cancel
+                        )
+                    )
+                elif goal is None:
+                    box.append(planner.solve(task, timeout=timeout, initial_state=facts))
+                else:
+                    box.append(planner.solve(task, timeout=timeout, initial_state=facts, goal=goal))
+            except BaseException as exc:
+                box.append(exc)
+            finally:
+                done.set()
+
+        threading.Thread(target=work, name="plan-bridge-solve", daemon=True).start()
+        while not done.wait(0.05):
+            if cancel.is_set():
+                raise MissionEnded("preempted", "preempted while planning")
+        if cancel.is_set():
+            raise MissionEnded("preempted", "preempted while planning")
+        value = box[0]
+        if isinstance(value, BaseException):
+            raise value
+        return value
