@@ -34,6 +34,7 @@ from smach.introspection.events import (
     StateEntered,
     StateExited,
     Transition,
+    event_of,
     stamp,
 )
 from smach.user_data import UserData
@@ -174,101 +175,51 @@ class ContainerEvents:
         for listener in self._local:
             listener(event)
 
-    # Capture listeners (journal, viewer) get a tuple; an Event object is built only
-    # when somebody else listens. ``thread`` may be passed by a caller that already
-    # knows it (a run's own thread).
-    def _emit_started(self, initial_states: Sequence[str], thread: str | None = None) -> None:
+    def _send(self, cls: type[Event], path: str, thread: str | None, *fields: Any) -> None:
+        """Send an event to the listeners: a tuple to the capture listeners (journal,
+        viewer), an Event object only if somebody else listens. ``thread`` may be given
+        by a caller that knows it (a run's own thread)."""
+        capture = (cls, path, _monotonic(), thread or _current_thread().name, *fields)
         bus = self._bus
-        if bus.listeners or self._local:
-            t = _monotonic()
-            thread = thread or _current_thread().name
-            states, kind = tuple(initial_states), type(self).__name__
-            if bus.sinks:
-                bus.capture((ContainerStarted, self._path, t, thread, kind, states))
-            if bus.event_listeners or self._local:
-                self._deliver(
-                    ContainerStarted(
-                        path=self._path,
-                        time=t,
-                        thread=thread,
-                        container_type=kind,
-                        initial_states=states,
-                    )
-                )
+        if bus.sinks:
+            bus.capture(capture)
+        if bus.event_listeners or self._local:
+            self._deliver(event_of(capture))
+
+    # Each emitter: the event if anybody listens, the log line if lines are wanted.
+    def _emit_started(self, initial_states: Sequence[str], thread: str | None = None) -> None:
+        if self._bus.listeners or self._local:
+            kind = type(self).__name__
+            self._send(ContainerStarted, self._path, thread, kind, tuple(initial_states))
         if self._log_info:
             self._log_started(initial_states)
 
     def _emit_entered(self, label: str, thread: str | None = None) -> None:
-        bus = self._bus
-        if bus.listeners or self._local:
-            t = _monotonic()
-            thread = thread or _current_thread().name
-            path = f"{self._path}/{label}"
-            if bus.sinks:
-                bus.capture((StateEntered, path, t, thread, label))
-            if bus.event_listeners or self._local:
-                self._deliver(StateEntered(path=path, time=t, thread=thread, label=label))
+        if self._bus.listeners or self._local:
+            self._send(StateEntered, f"{self._path}/{label}", thread, label)
         if self._log_info:
             self._log_entered(label)
 
     def _emit_exited(self, label: str, outcome: str | None, thread: str | None = None) -> None:
-        bus = self._bus
-        if bus.listeners or self._local:
-            t = _monotonic()
-            thread = thread or _current_thread().name
-            path = f"{self._path}/{label}"
-            if bus.sinks:
-                bus.capture((StateExited, path, t, thread, label, outcome))
-            if bus.event_listeners or self._local:
-                self._deliver(
-                    StateExited(path=path, time=t, thread=thread, label=label, outcome=outcome)
-                )
+        if self._bus.listeners or self._local:
+            self._send(StateExited, f"{self._path}/{label}", thread, label, outcome)
         if self._log_info:
             self._log_exited(label, outcome)
 
     def _emit_transition(
         self, source: str, outcome: str, target: str, thread: str | None = None
     ) -> None:
-        bus = self._bus
-        if bus.listeners or self._local:
-            t = _monotonic()
-            thread = thread or _current_thread().name
-            if bus.sinks:
-                bus.capture((Transition, self._path, t, thread, source, outcome, target))
-            if bus.event_listeners or self._local:
-                self._deliver(
-                    Transition(
-                        path=self._path,
-                        time=t,
-                        thread=thread,
-                        source=source,
-                        outcome=outcome,
-                        target=target,
-                    )
-                )
+        if self._bus.listeners or self._local:
+            self._send(Transition, self._path, thread, source, outcome, target)
         if self._log_info:
             self._log_transition(source, outcome, target)
 
     def _emit_terminated(
         self, terminal_states: Sequence[str], outcome: str | None, thread: str | None = None
     ) -> None:
-        bus = self._bus
-        if bus.listeners or self._local:
-            t = _monotonic()
-            thread = thread or _current_thread().name
+        if self._bus.listeners or self._local:
             states = tuple(terminal_states)
-            if bus.sinks:
-                bus.capture((ContainerTerminated, self._path, t, thread, states, outcome))
-            if bus.event_listeners or self._local:
-                self._deliver(
-                    ContainerTerminated(
-                        path=self._path,
-                        time=t,
-                        thread=thread,
-                        terminal_states=states,
-                        outcome=outcome,
-                    )
-                )
+            self._send(ContainerTerminated, self._path, thread, states, outcome)
         if self._log_info:
             self._log_terminated(terminal_states, outcome)
 
