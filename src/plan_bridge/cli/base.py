@@ -14,6 +14,7 @@ import argparse
 import sys
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, TextIO
 
 __all__ = [
@@ -22,10 +23,14 @@ __all__ = [
     "EXIT_INTERNAL",
     "EXIT_OK",
     "Command",
+    "PddlInput",
+    "add_input_arguments",
     "bounded",
+    "check_input",
     "fail",
     "positive_seconds",
     "progress",
+    "resolve_input",
 ]
 
 EXIT_OK = 0
@@ -76,3 +81,102 @@ def bounded(
 positive_seconds = bounded(
     float, 0.0, sys.float_info.max, "a positive number of seconds", open_low=True
 )
+
+
+# -- the PDDL input every command takes ----------------------------------------------
+
+
+def add_input_arguments(parser: argparse.ArgumentParser, *, optional: bool = False) -> None:
+    """``TARGET [PROBLEM] [--problem P]``: a domain folder (its ``domain.pddl`` and
+    ``problems/``), or a domain file and a problem file."""
+    parser.add_argument(
+        "target",
+        metavar="TARGET",
+        nargs="?" if optional else None,
+        help="a domain folder (domain.pddl + problems/) or a domain .pddl file",
+    )
+    parser.add_argument(
+        "problem_file",
+        metavar="PROBLEM",
+        nargs="?",
+        help="the problem .pddl file (same as --problem)",
+    )
+    parser.add_argument(
+        "--problem",
+        metavar="FILE",
+        help="problem file, or the name of one in the folder's problems/ (default: the "
+        "folder's first); required with a domain .pddl",
+    )
+
+
+class InputError(ValueError):
+    """The command line names PDDL input that does not exist or does not fit together."""
+
+
+@dataclass(frozen=True)
+class PddlInput:
+    """The files a command reads: the domain and its problem(s)."""
+
+    domain: Path
+    problems: tuple[Path, ...]
+    folder: Path | None = None
+
+
+def resolve_input(args: argparse.Namespace, *, every_problem: bool = False) -> PddlInput:
+    """The domain and problem files named by ``args`` (see :func:`add_input_arguments`).
+
+    Merges ``PROBLEM`` into ``args.problem``. ``every_problem``: without a problem,
+    a folder gives all of its ``problems/*.pddl`` (``check``), else the first one.
+    Raises :class:`InputError` with what was expected.
+    """
+    positional = getattr(args, "problem_file", None)
+    if positional is not None:
+        if args.problem is not None and args.problem != positional:
+            raise InputError(
+                f"two problems given ({positional} and --problem {args.problem}); give one"
+            )
+        args.problem = positional
+    target = Path(args.target)
+    if not target.exists():
+        if target.suffix == ".pddl" or args.problem is not None:
+            raise InputError(f"{target}: domain file not found; expected a PDDL domain file")
+        raise InputError(
+            f"{target}: no such file or folder; expected a domain folder (with domain.pddl "
+            "and problems/) or a domain .pddl file followed by a problem .pddl file"
+        )
+    if not target.is_dir():
+        if args.problem is None:
+            raise InputError(f"{target}: a domain file needs a problem file: {target} PROBLEM.pddl")
+        return PddlInput(target, (Path(args.problem),))
+    domain = target / "domain.pddl"
+    if not domain.is_file():
+        raise InputError(f"{target}: a domain folder must contain domain.pddl")
+    listed = tuple(sorted((target / "problems").glob("*.pddl")))
+    if args.problem is None:
+        if not listed:
+            raise InputError(f"{target}: no problems/*.pddl; give one with --problem")
+        return PddlInput(domain, listed if every_problem else listed[:1], target)
+    problem = Path(args.problem)
+    if not problem.exists():
+        for candidate in (target / "problems" / problem, target / "problems" / f"{problem}.pddl"):
+            if candidate.is_file():
+                problem = candidate
+                break
+        else:
+            names = ", ".join(p.stem for p in listed)
+            raise InputError(
+                f"{problem}: no such problem; problems of {target.name}: {names or 'none'}"
+            )
+    return PddlInput(domain, (problem,), target)
+
+
+def check_input(domain: Path, problem: Path) -> list[str]:
+    """The front end's verdict on one domain and problem, the same for every command:
+    raises :class:`~plan_bridge.errors.PddlError` (exit 2) for bad or unsupported
+    input, including features whose engines are not installed; returns the warnings.
+    Imports no unified-planning."""
+    from plan_bridge.pddl.front_end import analyse_files
+
+    front = analyse_files(domain, problem)
+    front.require_engines()
+    return front.warnings

@@ -17,9 +17,13 @@ from plan_bridge.cli.base import (
     EXIT_FAILED,
     EXIT_OK,
     Command,
+    InputError,
+    add_input_arguments,
     bounded,
+    check_input,
     fail,
     positive_seconds,
+    resolve_input,
 )
 
 if TYPE_CHECKING:
@@ -35,22 +39,8 @@ _probability = bounded(float, 0.0, 1.0, "a probability between 0 and 1")
 _non_negative_int = bounded(int, 0, float("inf"), "a whole number >= 0")
 
 
-def _configure_target(parser: argparse.ArgumentParser, optional: bool = False) -> None:
-    parser.add_argument(
-        "target",
-        metavar="TARGET",
-        nargs="?" if optional else None,
-        help="a domain folder (domains/NAME) or a domain.pddl",
-    )
-    parser.add_argument(
-        "--problem",
-        metavar="FILE",
-        help="problem file (or the name of one in the folder's problems/); required for a domain.pddl",
-    )
-
-
 def _configure_run(parser: argparse.ArgumentParser) -> None:
-    _configure_target(parser, optional=True)
+    add_input_arguments(parser, optional=True)
     parser.add_argument(
         "--planner",
         default="fast-downward",
@@ -132,12 +122,6 @@ def _configure_run(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def _load(args: argparse.Namespace) -> Target:
-    from plan_bridge.missions.mission import load_target
-
-    return load_target(args.target, args.problem)
-
-
 def _run(args: argparse.Namespace) -> int:
     from plan_bridge.errors import PlanBridgeError
 
@@ -168,7 +152,7 @@ def _resume_arguments(
     args: argparse.Namespace,
 ) -> tuple[dict[str, Any], dict[str, Any] | None] | int:
     """Take the run's options from the journal's header; find the last checkpoint."""
-    from smach.introspection.journal import read_journal
+    from smach.introspection.journal import read_journal, read_states
 
     if args.target is not None:
         return fail("with --resume, the target and options come from the journal: give no TARGET")
@@ -190,7 +174,10 @@ def _resume_arguments(
         )
     if any(r.get("kind") == "summary" for r in records):
         return fail(f"{args.resume}: that run already finished (the journal has its summary)")
-    checkpoints = [r for r in records if r.get("kind") == "checkpoint"]
+    try:
+        checkpoints = read_states(records, "checkpoint")
+    except (ValueError, TypeError, KeyError) as exc:
+        return fail(f"{args.resume}: its checkpoints cannot be read: {exc}")
     return run, checkpoints[-1] if checkpoints else None
 
 
@@ -241,6 +228,15 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
         )
     except ValueError as exc:
         return fail(str(exc))
+    try:
+        # The same front-end verdict as `check` and `plan`, before anything heavy loads.
+        chosen = resolve_input(args)
+        input_warnings = check_input(chosen.domain, chosen.problems[0])
+    except InputError as exc:
+        return fail(str(exc))
+    if not args.quiet:
+        for warning in input_warnings:
+            print(f"warning: {warning}", file=sys.stderr, flush=True)
     from plan_bridge.missions.mission import load_target
     from plan_bridge.planning.worker import default_pool
 
@@ -324,7 +320,7 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
 
         def write_checkpoint(state: dict[str, Any]) -> None:
             snap = world.snapshot() if hasattr(world, "snapshot") else None
-            active_journal.write_raw("checkpoint", state=state, world=snap)
+            active_journal.write_state("checkpoint", state=state, world=snap)
 
         executive.checkpoint = write_checkpoint
     viewer = None
@@ -433,7 +429,7 @@ class ProgressPrinter:
 
 
 def _configure_check(parser: argparse.ArgumentParser) -> None:
-    _configure_target(parser)
+    add_input_arguments(parser)
 
 
 def _check(args: argparse.Namespace) -> int:
@@ -441,36 +437,45 @@ def _check(args: argparse.Namespace) -> int:
     from plan_bridge.missions.mission import load_target
 
     try:
-        target = _load(args)
-        problems_found: list[str] = []
-        paths = target.problems if args.problem is None else [target.problem_path]
-        for problem in paths:
-            try:
-                loaded = (
-                    load_target(args.target, problem) if problem != target.problem_path else target
-                )
-            except PlanBridgeError as exc:
-                problems_found.append(str(exc))
-                continue
-            setup = loaded.setup(seed=0, fail_rate=0.0)
-            for line in setup.skills.check(loaded.task):
-                problems_found.append(f"{problem.name}: {line}")
-            print(
-                f"{problem.name}: {len(loaded.task.actions)} actions, {len(loaded.task.objects)} objects, "
-                f"{len(loaded.task.goal_facts)} goal atoms",
-                file=sys.stderr,
-            )
-    except PlanBridgeError as exc:
+        chosen = resolve_input(args, every_problem=True)
+    except InputError as exc:
         return fail(str(exc))
+    single = len(chosen.problems) == 1
+    problems_found: list[str] = []
+    name = ""
+    for problem in chosen.problems:
+        try:
+            warnings = check_input(chosen.domain, problem)
+            loaded = load_target(args.target, problem)
+            setup = loaded.setup(seed=0, fail_rate=0.0)
+        except PlanBridgeError as exc:
+            if single:
+                # One problem: the same message and exit code as `plan` and `run`.
+                return fail(str(exc))
+            problems_found.append(str(exc))
+            continue
+        name = loaded.name
+        for warning in warnings:
+            print(f"warning: {warning}", file=sys.stderr)
+        for line in setup.skills.check(loaded.task):
+            problems_found.append(f"{problem.name}: {line}")
+        print(
+            f"{problem.name}: {len(loaded.task.actions)} actions, {len(loaded.task.objects)} objects, "
+            f"{len(loaded.task.goal_facts)} goal atoms",
+            file=sys.stderr,
+        )
     if problems_found:
         return fail(f"{len(problems_found)} problem(s):\n  " + "\n  ".join(problems_found))
-    print(f"{target.name}: OK ({len(paths)} problem(s) checked)")
+    print(f"{name}: OK ({len(chosen.problems)} problem(s) checked)")
     return EXIT_OK
 
 
 COMMANDS = (
     Command("run", "plan and execute a mission in the simulated world", _configure_run, _run),
     Command(
-        "check", "validate PDDL, skill bindings and outcome mappings", _configure_check, _check
+        "check",
+        "validate PDDL (a folder, or DOMAIN PROBLEM), skill bindings and outcome mappings",
+        _configure_check,
+        _check,
     ),
 )

@@ -105,7 +105,7 @@ def test_deep_nesting_is_refused_before_the_parser_sees_it() -> None:
         (["run", str(DATA), "--policy", "magic"], "unknown replanning policy 'magic'"),
         (["run", str(DATA), "--problem", "p99"], "no such problem; problems of rooms: p01, p02"),
         (["run", str(DATA), "--planner", "no-such-engine"], "no-such-engine"),
-        (["check", str(DATA / "domain.pddl")], "needs --problem"),
+        (["check", str(DATA / "domain.pddl")], "needs a problem file"),
         (["study", str(DATA), "--approaches", "telepathy"], "unknown approaches ['telepathy']"),
         (["plan", "/dev/null", "/dev/null"], "/dev/null"),
         (["frobnicate"], "invalid choice: 'frobnicate'"),
