@@ -159,16 +159,25 @@ class SmachExecutor:
             self.node.destroy_node()
 
 
-@atexit.register
 def _stop_all() -> None:
     # Let executor threads leave rclpy before the interpreter tears it down (a
-    # daemon thread inside rcl at exit aborts the process).
+    # daemon thread inside rcl at exit aborts the process). Also registered to run
+    # when the main thread ends, before concurrent.futures refuses new work: a
+    # message arriving then would make the spinning thread fail loudly.
     with SmachExecutor._lock:
         instances = list(SmachExecutor._instances.values())
     for instance in instances:
         instance._alive = False
     for instance in instances:
         instance._thread.join(1.0)
+
+
+atexit.register(_stop_all)
+# Private but stable since Python 3.9; runs in reverse order of registration, so
+# before concurrent.futures' own hook (registered when rclpy imported it).
+_register_thread_exit = getattr(threading, "_register_atexit", None)
+if _register_thread_exit is not None:
+    _register_thread_exit(_stop_all)
 
 
 def subscription_events(topic: str) -> Any:

@@ -14,7 +14,7 @@ from typing import Any
 
 import pytest
 
-pytest.importorskip("smach.ros", reason="needs rclpy (the ros extra)")
+pytest.importorskip("smach.ros._api", reason="needs rclpy (the ros extra)")
 
 from ros_helpers import wait_for
 
