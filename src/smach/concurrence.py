@@ -227,11 +227,19 @@ class Concurrence(Container):
     def _run_child(self, run: _Run, child: _Child) -> None:
         label = child.label
         observed = self._bus.listeners or self._local or self._log_info
+        control = self._bus.control  # runtime control (smach.control): None unless attached
+        path = f"{self._path}/{label}" if control is not None else ""
         try:
+            if control is not None:
+                control.enter(self, path, child.state)  # holds this branch while paused
             if observed:
                 self._emit_entered(label)
             outcome = child.state.execute(child.remapper)
+            if control is not None:
+                outcome = control.leave(path, child.state, outcome)
         except Exception as exc:
+            if control is not None:
+                control.leave(path, child.state, None)
             error = self._child_error(label, child.state, exc)
             error.__cause__ = exc
             self._child_failed(run, error)
@@ -348,12 +356,6 @@ class Concurrence(Container):
         state["_children"] = None
         state["_current_run"] = None
         return state
-
-    def request_preempt(self) -> None:
-        super().request_preempt()
-        run = self._current_run
-        if run is not None:
-            self._preempt_children(run, None)
 
     # -- introspection ---------------------------------------------------------------------------
     def get_children(self) -> dict[str, State]:

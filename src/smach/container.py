@@ -279,6 +279,8 @@ class Container(ContainerEvents, State):
         if old is not bus:
             for listener in old.listeners:
                 bus.add(listener)
+            if bus.control is None:  # a controlled subtree stays controlled
+                bus.control = old.control
         self._bus = bus
         self._path = path
         for label, child in self.get_children().items():
@@ -303,8 +305,9 @@ class Container(ContainerEvents, State):
         2. refuse a second run while one is going on;
         3. ``_begin``: copy input keys in, decide who listens this run;
         4. ``container_started``; then the container's own loop, ``_run()``;
-        5. ``container_terminated``; output keys copied out (skipped when ``_run``
-           returned ``None`` because ``smach.is_shutdown()`` became true);
+        5. the outcome checked against the declared ones; ``container_terminated``;
+           output keys copied out (all skipped when ``_run`` returned ``None``
+           because ``smach.is_shutdown()`` became true);
         6. on an exception, an ``error`` event before it propagates;
         7. always: the running flag cleared, and preempt requests addressed to this
            run dropped (``_after_run``).
@@ -327,6 +330,11 @@ class Container(ContainerEvents, State):
             outcome = self._run()
             if outcome is None:
                 return None
+            if outcome not in self._outcomes:
+                raise InvalidOutcomeError(
+                    f"{self._path}: the {type(self).__name__} ended with {outcome!r}, which is "
+                    f"not one of its outcomes: {', '.join(self._outcomes)}"
+                )
             if bus.listeners or self._local or self._log_info:
                 self._emit_terminated(self._terminal_states(), outcome, self._thread)
             if parent_ud is not None and self._output_keys:
@@ -373,6 +381,14 @@ class Container(ContainerEvents, State):
         Called once after every change (see :meth:`_invalidate`), when everything
         below is known to be consistent; the run loop then only looks things up.
         """
+
+    def request_preempt(self) -> None:
+        """Ask this container to stop: set its flag, then forward to the running children."""
+        super().request_preempt()
+        if self._running:
+            children = self.get_children()
+            for label in self.get_active_states():
+                children[label].request_preempt()
 
     def is_running(self) -> bool:
         # (A container that writes its own execute() is running while it has active states.)

@@ -317,7 +317,7 @@ class Controller:
         A held state is released by the request (it starts with it pending).
         """
         with self._cond:
-            target = self.root if path is None else self._find(path)
+            target = self.root if path is None else self.find(path)
             record = self._record("preempt", source, target.path)
         target.request_preempt()
         self.wake()
@@ -365,6 +365,19 @@ class Controller:
             state.request_preempt()
             record = self._record("force_outcome", source, path, outcome=outcome)
         return self._done(record)
+
+    def note(
+        self, action: str, *, source: str = "api", path: str = "", **details: Any
+    ) -> ControlRecord:
+        """Record a control action carried out elsewhere (a mission's skip, replan, goal).
+
+        It joins this controller's :attr:`history` and goes to its observers (the
+        journal), so every control action of a tree is in one stream.
+        """
+        with self._lock:
+            record = self._record(action, source, path, **details)
+        self._notify([record])
+        return record
 
     # -- reading ---------------------------------------------------------------------------
     def status(self) -> ControlStatus:
@@ -458,7 +471,8 @@ class Controller:
                 return pattern
         return None
 
-    def _find(self, path: str) -> State:
+    def find(self, path: str) -> State:
+        """The state at ``path`` in this tree (ControlError naming the children if none)."""
         if not isinstance(path, str) or not path.startswith("/"):
             raise ControlError(f"a state path starts with '/', got {path!r}")
         node: State = self.root

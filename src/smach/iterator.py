@@ -164,6 +164,9 @@ class Iterator(Container):
             data[it_label] = item
             if self._preempt_requested:
                 state.request_preempt()
+            control = bus.control  # runtime control (smach.control): None unless attached
+            if control is not None:
+                control.enter(self, state._path, state)
             observed = bus.listeners or self._local
             if observed:
                 self._emit_entered(label, thread)  # (and the log line, if wanted)
@@ -172,7 +175,11 @@ class Iterator(Container):
             try:
                 outcome = state.execute(remapper)
             except Exception as exc:
+                if control is not None:
+                    control.leave(state._path, state, None)
                 raise self._child_error(label, state, exc) from exc
+            if control is not None:
+                outcome = control.leave(state._path, state, outcome)
             if outcome not in registered:
                 raise self._bad_outcome(label, state, outcome)
             if observed:
@@ -193,17 +200,7 @@ class Iterator(Container):
         if preempted and final not in self._outcomes:
             # Stopped on a loop outcome: report the preemption if we can.
             final = "preempted" if "preempted" in self._outcomes else self._exhausted_outcome
-        if final not in self._outcomes:
-            raise InvalidUserCodeError(
-                f"{self._path}: the loop ended with {outcome!r}, which maps to no outcome of "
-                f"the iterator: {', '.join(self._outcomes)}"
-            )
         return final
-
-    def request_preempt(self) -> None:
-        super().request_preempt()
-        if self._running and self._state is not None:
-            self._state.request_preempt()
 
     # -- introspection ---------------------------------------------------------------------------
     def get_children(self) -> dict[str, State]:

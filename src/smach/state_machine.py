@@ -286,6 +286,12 @@ class StateMachine(Container):
                     self._handle_preempt(slot.state)
                 if slot.constants:
                     self._userdata._data.update(slot.constants)
+                control = bus.control  # runtime control (smach.control): None unless attached
+                if control is not None:
+                    if held is not None:  # the page/journal see the transition while held
+                        self._release((held, held_move))
+                        held = None
+                    control.enter(self, slot.path, slot.state)
                 observed = bus.listeners or self._local
                 if observed:
                     if thread is None:
@@ -315,7 +321,11 @@ class StateMachine(Container):
                     # Typed str: anything else fails the lookup below and is reported.
                     outcome: str = slot.state.execute(slot.remapper)  # type: ignore[assignment]
                 except Exception as exc:
+                    if control is not None:
+                        control.leave(slot.path, slot.state, None)
                     raise self._child_error(label, slot.state, exc) from exc
+                if control is not None:  # a forced outcome replaces the returned one
+                    outcome = control.leave(slot.path, slot.state, outcome)  # type: ignore[assignment]
                 try:
                     target = slot.next[outcome]
                 except (KeyError, TypeError):

@@ -14,7 +14,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from typing import Any, TypeVar
 
 from smach.container import Container, construction_method
-from smach.exceptions import InvalidStateError, InvalidTransitionError
+from smach.exceptions import InvalidStateError
 from smach.state import State
 from smach.user_data import Remapper, UserData
 
@@ -106,13 +106,20 @@ class Wrapper(Container):
         assert child is not None and label is not None and remapper is not None
         if self._preempt_requested:
             child.request_preempt()
+        control = self._bus.control  # runtime control (smach.control): None unless attached
+        if control is not None:
+            control.enter(self, child._path, child)
         observed = self._observed()
         if observed:
             self._emit_entered(label)
         try:
             outcome = child.execute(remapper)
         except Exception as exc:
+            if control is not None:
+                control.leave(child._path, child, None)
             raise self._child_error(label, child, exc) from exc
+        if control is not None:
+            outcome = control.leave(child._path, child, outcome)
         if outcome not in child._outcomes:
             raise self._bad_outcome(label, child, outcome)
         if observed:
@@ -129,17 +136,7 @@ class Wrapper(Container):
         outcome = self.run(child, label)
         if self._preempt_requested and not child._preempt_requested:
             self.service_preempt()  # the child handled the request on our behalf
-        if outcome not in self._outcomes:
-            raise InvalidTransitionError(
-                f"{self._path}: {type(self).__name__}.run returned {outcome!r}; outcomes: "
-                f"{', '.join(self._outcomes)}"
-            )
         return outcome
-
-    def request_preempt(self) -> None:
-        super().request_preempt()
-        if self._running and self._child is not None:
-            self._child.request_preempt()
 
     # -- introspection -----------------------------------------------------------------------
     def get_children(self) -> dict[str, State]:

@@ -15,7 +15,8 @@ over server-sent events: the newest view plus the new timeline records.
 
 Security: binds 127.0.0.1 unless told otherwise, answers only GET, checks the Host
 header (so a web page elsewhere cannot reach it by DNS rebinding), sends no CORS
-headers, and is read-only: there is no endpoint that changes the machine.
+headers, and is read-only unless control endpoints are enabled (see
+:mod:`smach.introspection.control_api`: POST behind a per-run token).
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ from importlib import resources
 from typing import Any
 from urllib.parse import parse_qs, urlsplit
 
+from smach.introspection.control_api import ViewerControls
 from smach.introspection.model import History, ViewModel
 from smach.introspection.source import LiveSource, Source
 from smach.introspection.structure import StateNode
@@ -42,6 +44,7 @@ STATIC = {
     "app.js": "text/javascript; charset=utf-8",
     "app.css": "text/css; charset=utf-8",
     "graph.css": "text/css; charset=utf-8",
+    "control.js": "text/javascript; charset=utf-8",
 }
 MAX_RECORDS_PER_MESSAGE = 300
 MAX_RECORDS_PER_REQUEST = 2000
@@ -77,6 +80,8 @@ class ViewerServer:
         self._view_cache: tuple[int, str] | None = None
         self.pump_busy_s = 0.0
         self.clients = 0
+        #: Control endpoints (smach.introspection.control_api.enable_controls); None: read-only.
+        self.controls: ViewerControls | None = None
         self._httpd = ThreadingHTTPServer((host, port), _handler_class(self))
         self._httpd.daemon_threads = True
         self.host = host
@@ -128,7 +133,7 @@ class ViewerServer:
             "live": bool(self.source.live),
             "total": self.history.total,
             "first": self.history.first,
-            "controls": False,
+            "controls": self.controls is not None,
             "header": header,
         }
 
@@ -267,6 +272,7 @@ class _Handler(BaseHTTPRequestHandler):
             "/api/records": self._records,
             "/api/export": self._export,
             "/api/stream": self._stream,
+            "/api/control": self._control,
         }
         handler = route.get(url.path)
         try:
@@ -282,7 +288,36 @@ class _Handler(BaseHTTPRequestHandler):
         except (BrokenPipeError, ConnectionResetError):
             pass
 
+    def do_POST(self) -> None:
+        if not self._host_allowed():
+            self._error(HTTPStatus.FORBIDDEN, "unexpected Host header")
+            return
+        controls = self.server_viewer.controls
+        if controls is None:
+            self._error(HTTPStatus.NOT_IMPLEMENTED, "a read-only viewer answers GET only")
+            return
+        if urlsplit(self.path).path != "/api/control":
+            self._error(HTTPStatus.NOT_FOUND, "POST goes to /api/control only")
+            return
+        try:
+            self._json(controls.handle_post(self.headers, self.rfile.read))
+        except PermissionError as exc:
+            self._error(HTTPStatus.FORBIDDEN, str(exc))
+        except ValueError as exc:
+            self._error(HTTPStatus.BAD_REQUEST, str(exc))
+        except (BrokenPipeError, ConnectionResetError):
+            pass
+
     # -- routes ----------------------------------------------------------------------------------
+    def _control(self, query: dict[str, str], raw: str) -> None:
+        viewer = self.server_viewer
+        if viewer.controls is None:
+            self._json({"enabled": False})
+            return
+        root = viewer.structure()
+        paths = [node.path for node in root.walk()] if root is not None else []
+        self._json({"enabled": True, **viewer.controls.status(paths)})
+
     def _index(self, query: dict[str, str], raw: str) -> None:
         self._send(_static("index.html"), "text/html; charset=utf-8")
 

@@ -1,0 +1,181 @@
+"""The viewer's control endpoints: buttons and breakpoints behind a per-run token.
+
+``enable_controls(viewer, controller)`` turns a read-only viewer into a control
+panel for one :class:`~smach.control.Controller`:
+
+* ``GET /api/control`` returns the control state (``running``, ``paused``,
+  ``at_breakpoint`` ...), the breakpoints and the states they match, the states
+  held and running (with their outcomes, for *force outcome*) and the last control
+  actions. Reading needs no token (the page is readable anyway).
+* ``POST /api/control`` with a JSON body ``{"action": ..., ...}`` performs an action;
+  it needs the header ``X-Control-Token`` with the run's token and
+  ``Content-Type: application/json``.
+
+Security: the token is random per run (``secrets``), compared in constant time,
+and only shown in the URL printed for the operator (``...#token=...``, a fragment,
+so it is never sent in a request line or a Referer). A page of another origin can
+neither read the token nor send the custom header (no CORS is answered), and the
+server's Host check still applies; the server stays on loopback unless told
+otherwise. Bodies are bounded (16 KB) and parsed as JSON only.
+"""
+
+from __future__ import annotations
+
+import hmac
+import json
+import secrets
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, Any, Protocol
+
+from smach.container import Container
+from smach.control import ControlError, Controller
+
+if TYPE_CHECKING:
+    from smach.introspection.server import ViewerServer
+
+__all__ = ["MAX_BODY", "ViewerControls", "enable_controls"]
+
+MAX_BODY = 16 * 1024
+
+#: An extra action (e.g. plan_bridge's mission controls): called with the request
+#: body; raises ValueError (or a subclass) with a message for the operator.
+Action = Callable[[Mapping[str, Any]], object]
+
+_CORE_ACTIONS = (
+    "pause",
+    "resume",
+    "step",
+    "preempt",
+    "force_outcome",
+    "toggle_breakpoint",
+    "add_breakpoint",
+    "remove_breakpoint",
+    "clear_breakpoints",
+)
+
+
+class Headers(Protocol):
+    """The request headers (``http.client.HTTPMessage`` or a dict)."""
+
+    def get(self, name: str, /) -> Any: ...
+
+
+class ViewerControls:
+    """What the viewer's control endpoints do (the HTTP side is in the server)."""
+
+    def __init__(
+        self,
+        controller: Controller,
+        *,
+        token: str | None = None,
+        actions: Mapping[str, Action] | None = None,
+    ) -> None:
+        self.controller = controller
+        self.token = token or secrets.token_urlsafe(24)
+        clash = sorted(set(actions or {}) & set(_CORE_ACTIONS))
+        if clash:
+            raise ValueError(f"extra control actions {clash} would hide the built-in ones")
+        self.actions = dict(actions or {})
+
+    def authorised(self, token: str | None) -> bool:
+        return token is not None and hmac.compare_digest(token.encode(), self.token.encode())
+
+    def status(self, known_paths: list[str]) -> dict[str, Any]:
+        ctl = self.controller
+        status = ctl.status()
+        data = status.to_json()
+        data["matching"] = [p for p in known_paths if ctl.matches(p) is not None]
+        outcomes: dict[str, list[str]] = {}
+        for path in status.running:
+            try:
+                state = ctl.find(path)
+            except ControlError:
+                continue
+            if not isinstance(state, Container):
+                outcomes[path] = list(state.get_registered_outcomes())
+        data["outcomes"] = outcomes
+        data["actions"] = [*_CORE_ACTIONS, *sorted(self.actions)]
+        data["history"] = [r.to_json() for r in list(ctl.history)[-15:]]
+        return data
+
+    def perform(self, body: Mapping[str, Any]) -> dict[str, Any]:
+        """Carry out one request; ValueError (-> 400) with a message when it cannot be."""
+        action = body.get("action")
+        path = body.get("path")
+        if path is not None and not isinstance(path, str):
+            raise ValueError(f"'path' must be a string, got {path!r}")
+        ctl = self.controller
+        source = "viewer"
+        try:
+            if action == "pause":
+                ctl.pause(source=source)
+            elif action == "resume":
+                ctl.resume(source=source)
+            elif action == "step":
+                ctl.step(source=source)
+            elif action == "preempt":
+                ctl.preempt(path or None, source=source)
+            elif action == "force_outcome":
+                outcome = body.get("outcome")
+                if not isinstance(outcome, str):
+                    raise ValueError("force_outcome needs 'outcome' (a string)")
+                ctl.force_outcome(outcome, path or None, source=source)
+            elif action in ("toggle_breakpoint", "add_breakpoint", "remove_breakpoint"):
+                pattern = body.get("pattern", path)
+                if not isinstance(pattern, str):
+                    raise ValueError(f"{action} needs 'pattern' (a state path or a glob)")
+                getattr(ctl, action)(pattern, source=source)
+            elif action == "clear_breakpoints":
+                ctl.clear_breakpoints(source=source)
+            elif isinstance(action, str) and action in self.actions:
+                result = self.actions[action](body)
+                return {"ok": True, "result": str(result) if result is not None else None}
+            else:
+                allowed = ", ".join([*_CORE_ACTIONS, *sorted(self.actions)])
+                raise ValueError(f"unknown control action {action!r}; actions: {allowed}")
+        except ControlError as exc:
+            raise ValueError(str(exc)) from exc
+        return {"ok": True, "status": ctl.status().to_json()}
+
+    def handle_post(
+        self, headers: Headers, read: Callable[[int], bytes]
+    ) -> dict[str, Any]:
+        """Check the headers and the body of a POST, then :meth:`perform` it.
+
+        Raises PermissionError (-> 403) for a missing or wrong token and ValueError
+        (-> 400) for a bad body.
+        """
+        if not self.authorised(headers.get("X-Control-Token")):
+            raise PermissionError("missing or wrong control token (X-Control-Token)")
+        if (headers.get("Content-Type") or "").split(";")[0].strip() != "application/json":
+            raise ValueError("control requests are JSON (Content-Type: application/json)")
+        try:
+            length = int(headers.get("Content-Length") or "0")
+        except ValueError:
+            raise ValueError("bad Content-Length") from None
+        if length <= 0 or length > MAX_BODY:
+            raise ValueError(f"a control request body is 1 to {MAX_BODY} bytes")
+        try:
+            body = json.loads(read(length).decode("utf-8"))
+        except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+            raise ValueError(f"the body is not JSON: {exc}") from None
+        if not isinstance(body, dict):
+            raise ValueError('the body must be a JSON object like {"action": "pause"}')
+        return self.perform(body)
+
+
+def enable_controls(
+    viewer: ViewerServer,
+    controller: Controller,
+    *,
+    token: str | None = None,
+    actions: Mapping[str, Action] | None = None,
+) -> str:
+    """Give ``viewer`` control buttons for ``controller``; return the URL with the token.
+
+    Open that URL (it carries the token in its fragment) to get a working panel;
+    without the token the page shows the control state read-only.
+    """
+    controls = ViewerControls(controller, token=token, actions=actions)
+    viewer.controls = controls
+    return f"{viewer.url}#token={controls.token}"
