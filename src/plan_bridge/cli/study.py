@@ -9,8 +9,14 @@ from pathlib import Path
 from typing import Any
 
 from plan_bridge.cli.base import EXIT_OK, Command, fail
-from plan_bridge.study.report import authoring_cost, write_report
-from plan_bridge.study.runs import APPROACHES, DEFAULT_APPROACHES, RunSpec, run_study
+from plan_bridge.study.report import authoring_cost, fault_model, write_report
+from plan_bridge.study.runs import (
+    APPROACHES,
+    DEFAULT_APPROACHES,
+    RunSpec,
+    read_results,
+    run_study,
+)
 
 
 def _float_list(text: str) -> list[float]:
@@ -47,7 +53,21 @@ def _configure(parser: argparse.ArgumentParser) -> None:
         "--out", default="study-results", help="output folder (default study-results)"
     )
     parser.add_argument(
-        "--jobs", type=int, default=max(1, min(2, os.cpu_count() or 1)), help="worker processes"
+        "--jobs",
+        type=int,
+        default=None,
+        help="local worker processes (default: up to 2; not with --cluster)",
+    )
+    parser.add_argument(
+        "--cluster",
+        metavar="ADDRESS",
+        help="run each run as a Dask task: tcp://HOST:PORT (a running `dask scheduler`) "
+        "or local:N (start N local worker processes); needs smach-planner[cluster]",
+    )
+    parser.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue the study in --out: skip the runs results.csv already has",
     )
     parser.add_argument(
         "--run-timeout", type=float, default=300.0, help="seconds before a stuck run is killed"
@@ -62,8 +82,18 @@ def _run_command(args: argparse.Namespace) -> int:
     unknown = [a for a in approaches if a not in APPROACHES]
     if unknown:
         return fail(f"unknown approaches {unknown}; approaches: {', '.join(APPROACHES)}")
-    if args.runs < 1 or args.jobs < 1:
+    if args.runs < 1 or (args.jobs is not None and args.jobs < 1):
         return fail("--runs and --jobs must be at least 1")
+    if args.cluster:
+        from plan_bridge.study.cluster import ClusterError, parse_cluster
+
+        if args.jobs is not None:
+            return fail("--jobs is for local runs; with --cluster the cluster's workers run them")
+        try:
+            parse_cluster(args.cluster)
+        except ClusterError as exc:
+            return fail(str(exc))
+    jobs = args.jobs or max(1, min(2, os.cpu_count() or 1))
     try:
         seeds = [int(s) for s in args.seeds.split(",")] if args.seeds else list(range(args.runs))
     except ValueError:
@@ -85,6 +115,12 @@ def _run_command(args: argparse.Namespace) -> int:
         for s in seeds
     ]
     out = Path(args.out)
+    written = read_results(out / "results.csv")
+    if written and not args.resume:
+        return fail(
+            f"{out}/results.csv already holds {len(written)} runs: pass --resume to continue "
+            "that study (runs it has are skipped), or choose another --out"
+        )
 
     def progress(done: int, total: int, spec: RunSpec, row: dict[str, Any], elapsed: float) -> None:
         width = 24
@@ -100,17 +136,30 @@ def _run_command(args: argparse.Namespace) -> int:
         )
 
     total_runs = len(specs)
+    executor = f"Dask cluster {args.cluster}" if args.cluster else f"{jobs} local workers"
     print(
-        f"plan-bridge study: {total_runs} runs ({len(args.targets)} targets x {len(approaches)} approaches x {len(args.fault_rates)} fault rates x {len(seeds)} seeds), {args.jobs} workers, results in {out}/",
+        f"plan-bridge study: {total_runs} runs ({len(args.targets)} targets x {len(approaches)} approaches x {len(args.fault_rates)} fault rates x {len(seeds)} seeds), {executor}, results in {out}/",
         file=sys.stderr,
         flush=True,
     )
-    rows = run_study(specs, out, jobs=args.jobs, run_timeout=args.run_timeout, progress=progress)
+    try:
+        rows = run_study(
+            specs,
+            out,
+            jobs=jobs,
+            run_timeout=args.run_timeout,
+            progress=progress,
+            cluster=args.cluster,
+        )
+    except (PlanBridgeError, ValueError) as exc:
+        return fail(str(exc))
     authoring: list[dict[str, Any]] = []
+    fault_models: dict[str, dict[str, float]] = {}
     for target in args.targets:
         authoring += authoring_cost(str(target), args.problem)
+        fault_models[Path(target).name] = fault_model(str(target), args.problem)
     command = "plan-bridge study " + " ".join(sys.argv[2:] if len(sys.argv) > 2 else args.targets)
-    report = write_report(rows, out, authoring, command)
+    report = write_report(rows, out, authoring, command, fault_models=fault_models)
     errors = sum(1 for r in rows if r["outcome"] in ("error", "timeout", "crashed"))
     print(f"{len(rows)} runs ({errors} errors); report: {report}", file=sys.stderr)
     return EXIT_OK if errors == 0 else 1

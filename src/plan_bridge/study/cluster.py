@@ -120,6 +120,9 @@ class DaskPool:
                 threads_per_worker=1,
                 processes=True,
                 dashboard_address=None,
+                # No dashboard, and the scheduler's HTTP endpoint on a free port, not on
+                # 8787 where another cluster may already listen.
+                scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
                 host="127.0.0.1",
             )
             scheduler = self.cluster.scheduler_address

@@ -1,28 +1,31 @@
-"""The study's report: success rates with intervals, authoring cost, plots, report.md."""
+"""The study's report: setup, success rates with intervals, comparisons with p-values,
+authoring cost, plots with captions, ``report.md``.
+
+Means and medians of times and steps are over *successful* runs only (a failed run
+stops early), and say so; cells with no successful run show "n/a", never 0. The
+mean wall time over all runs is given too, so nothing depends on that selection.
+This module is over 400 lines because the report's text is long; the numbers come
+from :mod:`~plan_bridge.study.comparison` and the plots from
+:mod:`~plan_bridge.study.figures`.
+"""
 
 from __future__ import annotations
 
 import csv
-import math
-import sys
 from collections import defaultdict
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
+from plan_bridge.study.comparison import compare_approaches, format_p
+from plan_bridge.study.environment import PLANNER_PACKAGES, read_sessions
+from plan_bridge.study.figures import draw_figures
 from plan_bridge.study.runs import APPROACHES, target_of
+from plan_bridge.study.statistics import median_ci, wilson
 
-__all__ = ["authoring_cost", "summarise_results", "wilson", "write_report"]
+__all__ = ["authoring_cost", "fault_model", "summarise_results", "wilson", "write_report"]
 
-
-def wilson(successes: int, n: int, z: float = 1.96) -> tuple[float, float]:
-    """95% Wilson score interval of a proportion."""
-    if n == 0:
-        return (0.0, 0.0)
-    p = successes / n
-    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
-    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
-    return (max(0.0, centre - half), min(1.0, centre + half))
+NA = "n/a"
 
 
 def _f(value: str) -> float:
@@ -40,9 +43,17 @@ def summarise_results(rows: Iterable[dict[str, str]]) -> list[dict[str, Any]]:
     for (target, variant, approach, rate), items in sorted(groups.items()):
         ok = [r for r in items if r["goal_reached"] == "True"]
         low, high = wilson(len(ok), len(items))
-        wall = sum(_f(r["wall_time_s"]) for r in ok) / len(ok) if ok else 0.0
         planning = sum(_f(r["planning_time_s"]) for r in items)
         total = sum(_f(r["wall_time_s"]) for r in items)
+
+        def mean_ok(column: str, digits: int, ok: list[dict[str, str]] = ok) -> float | str:
+            return round(sum(_f(r[column]) for r in ok) / len(ok), digits) if ok else NA
+
+        wall: tuple[float | str, ...] = (
+            tuple(round(v, 4) for v in median_ci([_f(r["wall_time_s"]) for r in ok]))
+            if ok
+            else (NA, NA, NA)
+        )
         summary.append(
             {
                 "target": target,
@@ -50,18 +61,19 @@ def summarise_results(rows: Iterable[dict[str, str]]) -> list[dict[str, Any]]:
                 "approach": approach,
                 "fault_rate": rate,
                 "runs": len(items),
+                "successes": len(ok),
                 "success_rate": round(len(ok) / len(items), 4),
                 "ci_low": round(low, 4),
                 "ci_high": round(high, 4),
                 "errors": sum(1 for r in items if r["outcome"] in ("error", "timeout", "crashed")),
-                "mean_wall_time_s": round(wall, 4),
-                "mean_sim_time_s": round(sum(_f(r["sim_time_s"]) for r in ok) / len(ok), 3)
-                if ok
-                else 0.0,
-                "mean_steps": round(sum(_f(r["steps"]) for r in ok) / len(ok), 2) if ok else 0.0,
-                "mean_actions": round(sum(_f(r["actions_executed"]) for r in ok) / len(ok), 2)
-                if ok
-                else 0.0,
+                "median_wall_time_s": wall[0],
+                "median_wall_ci_low": wall[1],
+                "median_wall_ci_high": wall[2],
+                "mean_wall_time_s": mean_ok("wall_time_s", 4),
+                "mean_wall_time_all_s": round(total / len(items), 4),
+                "mean_sim_time_s": mean_ok("sim_time_s", 3),
+                "mean_steps": mean_ok("steps", 2),
+                "mean_actions": mean_ok("actions_executed", 2),
                 "mean_faults": round(sum(_f(r["faults_injected"]) for r in items) / len(items), 2),
                 "planning_share": round(planning / total, 4) if total else 0.0,
                 "mean_replans": round(sum(_f(r["replans"]) for r in items) / len(items), 2),
@@ -170,164 +182,154 @@ def authoring_cost(target_path: str, problem: str = "") -> list[dict[str, Any]]:
     return rows
 
 
-# -- plots and report -------------------------------------------------------------------------------
-def _plots(summary: list[dict[str, Any]], out: Path) -> list[str]:
-    try:
-        import matplotlib
-    except ImportError:
-        print(
-            "plan-bridge study: matplotlib is not installed, so no plots "
-            "(pip install 'smach-planner[study]')",
-            file=sys.stderr,
+def fault_model(target_path: str, problem: str = "") -> dict[str, float]:
+    """Fault name -> probability per unit of fault rate, from the domain's world."""
+    target = target_of(target_path, problem)
+    if target.module is None or not hasattr(target.module, "setup"):
+        return {}
+    world = target.module.setup(target.task, seed=0, fail_rate=0.0).world
+    return dict(getattr(world, "fault_scale", {}) or {})
+
+
+# -- report.md ------------------------------------------------------------------------------------
+def _num(value: Any, fmt: str) -> str:
+    return NA if value == NA else format(value, fmt)
+
+
+def _ranges(values: list[int]) -> str:
+    """0,1,2,3,7 -> '0-3, 7'."""
+    parts: list[str] = []
+    for v in sorted(set(values)):
+        if parts and "-" not in parts[-1].lstrip("-") and int(parts[-1]) == v - 1:
+            parts[-1] = f"{parts[-1]}-{v}"
+        elif parts and "-" in parts[-1].lstrip("-") and int(parts[-1].rsplit("-", 1)[1]) == v - 1:
+            parts[-1] = f"{parts[-1].rsplit('-', 1)[0]}-{v}"
+        else:
+            parts.append(str(v))
+    return ", ".join(parts)
+
+
+def _setup_section(
+    rows: list[dict[str, str]],
+    summary: list[dict[str, Any]],
+    out: Path,
+    fault_models: dict[str, dict[str, float]],
+) -> list[str]:
+    seeds = [int(r["seed"]) for r in rows if r["seed"].lstrip("-").isdigit()]
+    rates = sorted({_f(r["fault_rate"]) for r in rows})
+    per_cell = sorted({s["runs"] for s in summary})
+    approaches = sorted({r["approach"] for r in rows}, key=lambda a: list(APPROACHES).index(a))
+    lines = [
+        "## Setup",
+        "",
+        f"- Runs: {len(rows)}; runs per cell (mission x approach x fault rate): "
+        + (f"{per_cell[0]}" if len(per_cell) == 1 else f"{per_cell[0]}-{per_cell[-1]}")
+        + f"; seeds {_ranges(seeds)} (one run per seed in every cell, the same seeds for "
+        "every approach, so every approach meets the same worlds and faults).",
+        f"- Fault rates: {', '.join(f'{r:g}' for r in rates)}. Approaches: "
+        + "; ".join(
+            f"`{a}` ({APPROACHES[a][0] or 'hand-written machine'}"
+            + (f", {APPROACHES[a][1]}" if APPROACHES[a][1] else "")
+            + ")"
+            for a in approaches
         )
-        return []
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    files: list[str] = []
-    targets = sorted({(s["target"], s["variant"]) for s in summary})
-    approaches = sorted(
-        {s["approach"] for s in summary},
-        key=lambda a: list(APPROACHES).index(a) if a in APPROACHES else 99,
-    )
-    if not targets:
-        return files
-
-    def panel_title(target: str, variant: str) -> str:
-        return f"{target} ({variant})" if variant else target
-
-    fig, axes = plt.subplots(1, len(targets), figsize=(4.6 * len(targets), 3.8), squeeze=False)
-    for ax, (target, variant) in zip(axes[0], targets, strict=True):
-        for approach in approaches:
-            pts = sorted(
-                (s["fault_rate"], s["success_rate"], s["ci_low"], s["ci_high"])
-                for s in summary
-                if s["target"] == target and s["variant"] == variant and s["approach"] == approach
+        + ".",
+    ]
+    if fault_models:
+        lines += [
+            "- Fault model: each fault is drawn from the run's seeded generator with "
+            "probability *scale x fault rate* (capped at 1) at the moment listed in the "
+            "domain's `world.py`:",
+            "",
+            "  | mission | fault | scale |",
+            "  |---|---|---:|",
+        ]
+        for target, model in sorted(fault_models.items()):
+            lines += [f"  | {target} | {name} | {scale:g} |" for name, scale in model.items()]
+        lines.append("")
+    sessions = read_sessions(out)
+    packages: dict[str, str] = {}
+    machines: dict[tuple[str, str, int], set[str]] = defaultdict(set)
+    for session in sessions:
+        writer = session.get("writer", {})
+        packages.update(writer.get("packages", {}))
+        for worker in session.get("workers", {}).values():
+            key = (
+                worker.get("host", "?"),
+                worker.get("cpu_model", "?"),
+                worker.get("cpu_count", 0),
             )
-            if not pts:
-                continue
-            xs = [p[0] for p in pts]
-            ys = [p[1] * 100 for p in pts]
-            err = [[(p[1] - p[2]) * 100 for p in pts], [(p[3] - p[1]) * 100 for p in pts]]
-            ax.errorbar(xs, ys, yerr=err, marker="o", capsize=3, label=approach)
-        ax.set_title(panel_title(target, variant))
-        ax.set_xlabel("fault rate")
-        ax.set_ylabel("goal reached (%)")
-        ax.set_ylim(-5, 105)
-        ax.grid(alpha=0.3)
-    axes[0][-1].legend(fontsize=8, loc="lower left")
-    fig.suptitle("Success rate vs fault rate (95% Wilson intervals)")
-    fig.tight_layout()
-    fig.savefig(out / "success_vs_fault_rate.png", dpi=110)
-    plt.close(fig)
-    files.append("success_vs_fault_rate.png")
-
-    fig, axes = plt.subplots(1, 2, figsize=(11, 3.8))
-    labels = [f"{panel_title(t, v)}\n{a}" for (t, v) in targets for a in approaches]
-    for ax, key, ylabel in (
-        (axes[0], "mean_sim_time_s", "simulated robot time per successful run (s)"),
-        (axes[1], "mean_steps", "states executed per successful run"),
-    ):
-        values = []
-        for t, v in targets:
-            for a in approaches:
-                rows = [
-                    s
-                    for s in summary
-                    if s["target"] == t and s["variant"] == v and s["approach"] == a
-                ]
-                values.append(sum(s[key] for s in rows) / len(rows) if rows else 0)
-        ax.bar(
-            range(len(values)),
-            values,
-            color=[f"C{i % len(approaches)}" for i in range(len(values))],
+            machines[key].add(f"Python {worker.get('python', '?')}, {worker.get('platform', '?')}")
+    if sessions:
+        lines.append(
+            "- Executed by: "
+            + "; ".join(f"{s.get('executor', '?')} ({s.get('started', '?')})" for s in sessions)
+            + "."
         )
-        ax.set_xticks(range(len(values)))
-        ax.set_xticklabels(labels, rotation=70, fontsize=7)
-        ax.set_ylabel(ylabel, fontsize=8)
-        ax.grid(axis="y", alpha=0.3)
-    fig.suptitle("Cost of successful runs (averaged over fault rates)")
-    fig.tight_layout()
-    fig.savefig(out / "time_and_actions.png", dpi=110)
-    plt.close(fig)
-    files.append("time_and_actions.png")
-
-    planned = [a for a in approaches if a != "scripted"]
-    fig, axes = plt.subplots(1, 2, figsize=(11, 3.8))
-    ax = axes[0]
-    for approach in planned:
-        shares = sorted(
-            (s["fault_rate"], s["planning_share"] * 100)
-            for s in summary
-            if s["approach"] == approach
+    for (host, cpu, count), systems in sorted(machines.items()):
+        lines.append(f"- Machine `{host}`: {cpu}, {count} CPUs; {'; '.join(sorted(systems))}.")
+    if packages:
+        lines.append(
+            "- Packages: " + ", ".join(f"{n} {v}" for n, v in sorted(packages.items())) + "."
         )
-        by_rate: dict[float, list[float]] = defaultdict(list)
-        for rate, share in shares:
-            by_rate[rate].append(share)
-        xs = sorted(by_rate)
-        ax.plot(xs, [sum(by_rate[x]) / len(by_rate[x]) for x in xs], marker="o", label=approach)
-    ax.set_xlabel("fault rate")
-    ax.set_ylabel("planning time / wall time (%)")
-    ax.set_title("Planning share of time")
-    ax.grid(alpha=0.3)
-    if planned:
-        ax.legend(fontsize=8)
-    ax = axes[1]
-    layers = ("skill", "retry", "continue", "repair", "replan")
-    bottoms = [0.0] * len(planned)
-    for layer in layers:
-        vals = []
-        for approach in planned:
-            rows = [s for s in summary if s["approach"] == approach]
-            vals.append(sum(s[f"absorbed_{layer}"] for s in rows) / len(rows) if rows else 0)
-        ax.bar(planned, vals, bottom=bottoms, label=layer)
-        bottoms = [b + v for b, v in zip(bottoms, vals, strict=True)]
-    ax.set_ylabel("faults absorbed per run")
-    ax.set_title("Where faults were absorbed")
-    ax.legend(fontsize=8)
-    ax.tick_params(axis="x", labelsize=8)
-    fig.tight_layout()
-    fig.savefig(out / "planning_share_and_absorption.png", dpi=110)
-    plt.close(fig)
-    files.append("planning_share_and_absorption.png")
-    return files
+        planners = []
+        for planner, dists in PLANNER_PACKAGES.items():
+            found = [f"{d} {packages[d]}" for d in dists if d in packages]
+            if found:
+                planners.append(f"{planner} ({', '.join(found)})")
+        lines.append("- Planners: " + "; ".join(planners) + ".")
+    return [*lines, ""]
 
 
 def write_report(
-    rows: list[dict[str, str]], out: Path, authoring: list[dict[str, Any]], command: str
+    rows: list[dict[str, str]],
+    out: Path,
+    authoring: list[dict[str, Any]],
+    command: str,
+    *,
+    fault_models: dict[str, dict[str, float]] | None = None,
 ) -> Path:
     summary = summarise_results(rows)
+    comparisons = compare_approaches(rows)
     _write_csv(out / "summary.csv", summary)
+    _write_csv(out / "comparisons.csv", comparisons)
     _write_csv(out / "authoring.csv", authoring)
-    plots = _plots(summary, out)
+    figures = draw_figures(summary, rows, out)
     lines = [
         "# Scripted vs planned: study report",
         "",
         f"Command: `{command}`",
         "",
         f"{len(rows)} runs. Success = the goal holds in the simulated world at the end. "
-        "Intervals are 95% Wilson score intervals.",
-        "",
-        "## Findings",
+        "Intervals are 95%: Wilson for success rates, Newcombe for their differences, "
+        "order statistics for medians. Times and steps are over successful runs only "
+        "(a failed run stops early); 'n/a' where no run succeeded.",
         "",
     ]
+    lines += _setup_section(rows, summary, out, fault_models or {})
+    lines += ["## Findings", ""]
     lines += _findings(summary, authoring)
     lines += [
         "",
         "## Success rate by fault rate",
         "",
-        "| target | approach | fault rate | runs | goal reached | 95% CI | mean wall time (s) | mean sim time (s) | planning share | replans/run |",
-        "|---|---|---:|---:|---:|---|---:|---:|---:|---:|",
+        "| target | approach | fault rate | runs | goal reached | 95% CI | median wall time of successful runs (s) [95% CI] | mean wall time, all runs (s) | mean sim time of successful runs (s) | planning share | replans/run |",
+        "|---|---|---:|---:|---:|---|---:|---:|---:|---:|---:|",
     ]
     for s in summary:
         name = f"{s['target']} ({s['variant']})" if s["variant"] else s["target"]
+        median = (
+            NA
+            if s["median_wall_time_s"] == NA
+            else f"{s['median_wall_time_s']:.3f} [{s['median_wall_ci_low']:.3f}, {s['median_wall_ci_high']:.3f}]"
+        )
         lines.append(
             f"| {name} | {s['approach']} | {s['fault_rate']:g} | {s['runs']} | "
             f"{s['success_rate'] * 100:.0f}% | {s['ci_low'] * 100:.0f}-{s['ci_high'] * 100:.0f}% | "
-            f"{s['mean_wall_time_s']:.3f} | {s['mean_sim_time_s']:.1f} | {s['planning_share'] * 100:.0f}% | "
-            f"{s['mean_replans']:.2f} |"
+            f"{median} | {s['mean_wall_time_all_s']:.3f} | {_num(s['mean_sim_time_s'], '.1f')} | "
+            f"{s['planning_share'] * 100:.0f}% | {s['mean_replans']:.2f} |"
         )
+    lines += _comparison_section(comparisons)
     lines += [
         "",
         "## Authoring cost",
@@ -341,10 +343,44 @@ def write_report(
             f"{a['pddl_actions']} | {a['states']} | {a['transitions']} |"
         )
     lines += ["", "## Plots", ""]
-    lines += [f"![{p}]({p})" for p in plots]
+    for n, figure in enumerate(figures, 1):
+        lines += [
+            f"![{figure.title}]({figure.stem}.png)",
+            "",
+            f"*Figure {n}. {figure.title}.* {figure.caption} "
+            f"([SVG]({figure.stem}.svg), PNG at 200 dpi)",
+            "",
+        ]
     path = out / "report.md"
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     return path
+
+
+def _comparison_section(comparisons: list[dict[str, Any]]) -> list[str]:
+    if not comparisons:
+        return []
+    lines = [
+        "",
+        f"## Comparisons with `{comparisons[0]['reference']}`",
+        "",
+        "Per cell, each approach against the reference: success rate (Fisher's exact "
+        "test; difference reference - approach with Newcombe's 95% interval) and the "
+        "wall and simulated times of successful runs (medians with 95% intervals, "
+        "Mann-Whitney U with tie correction). p-values are two-sided; p (Holm) adjusts "
+        "them over this whole table. Also in `comparisons.csv`.",
+        "",
+        "| target | fault rate | approach | metric | n (ref / approach) | reference | approach | difference | test | p | p (Holm) |",
+        "|---|---:|---|---|---|---|---|---|---|---:|---:|",
+    ]
+    for c in comparisons:
+        name = f"{c['target']} ({c['variant']})" if c["variant"] else c["target"]
+        lines.append(
+            f"| {name} | {c['fault_rate']:g} | {c['approach']} | {c['metric']} | "
+            f"{c['n_reference']} / {c['n_approach']} | {c['value_reference']} | "
+            f"{c['value_approach']} | {c['difference']} | {c['test'] or NA} | "
+            f"{format_p(c['p'])} | {format_p(c['p_holm'])} |"
+        )
+    return lines
 
 
 def _findings(summary: list[dict[str, Any]], authoring: list[dict[str, Any]]) -> list[str]:
@@ -369,10 +405,12 @@ def _findings(summary: list[dict[str, Any]], authoring: list[dict[str, Any]]) ->
         out.append(f"- **{name}**, fault rate {top:g}: goal reached by " + ", ".join(parts) + ".")
         planned = by.get((target, variant, "planned", top))
         scripted = by.get((target, variant, "scripted", top))
-        if planned and scripted and scripted["mean_wall_time_s"] and planned["mean_wall_time_s"]:
+        if planned and scripted:
             out.append(
-                f"  Successful planned runs took {planned['mean_wall_time_s']:.2f} s of wall time "
-                f"({planned['planning_share'] * 100:.0f}% planning) vs {scripted['mean_wall_time_s']:.3f} s scripted."
+                f"  Median wall time of successful runs: planned "
+                f"{_num(planned['median_wall_time_s'], '.2f')} s "
+                f"({planned['planning_share'] * 100:.0f}% of all planned runs' time is planning), "
+                f"scripted {_num(scripted['median_wall_time_s'], '.3f')} s."
             )
     costs: dict[str, dict[str, dict[str, Any]]] = defaultdict(dict)
     for a in authoring:

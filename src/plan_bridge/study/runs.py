@@ -45,7 +45,7 @@ APPROACHES: dict[str, tuple[str, str]] = {
     "replan-only": ("replan-only", "fast-downward"),
     "pyperplan": ("full", "pyperplan"),
 }
-DEFAULT_APPROACHES = ("scripted", "planned", "no-replan", "retry-only", "replan-only")
+DEFAULT_APPROACHES = tuple(APPROACHES)
 
 FIELDS = [
     "target",

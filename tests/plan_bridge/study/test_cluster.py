@@ -175,7 +175,7 @@ def test_a_worker_killed_mid_study_loses_no_run_and_resume_writes_none_twice(
     out = tmp_path / "study"
     rows = run_study(specs(range(4)), out, cluster=cluster.address, progress=progress)
     assert len(rows) == 16
-    assert {r["outcome"] for r in rows} <= {"succeeded", "aborted"}
+    assert {r["outcome"] for r in rows} <= {"succeeded", "aborted"}, [r["error"] for r in rows]
     survivor = addresses[({"a", "b"} - set(killed)).pop()]
     assert after_kill and survivor in after_kill
     with (out / "results.csv").open() as f:
@@ -200,7 +200,7 @@ def test_cluster_addresses_are_checked_before_anything_starts() -> None:
     assert parse_cluster("local:4") == ("local", 4)
     assert parse_cluster("tcp://10.0.0.5:8786") == ("tcp", "tcp://10.0.0.5:8786")
     for bad in ("local:0", "local:x", "10.0.0.5:8786", "tcp://host", "http://h:1"):
-        with pytest.raises(ClusterError, match=r"tcp://HOST:PORT.*local:N"):
+        with pytest.raises(ClusterError, match=r"tcp://HOST:PORT|local:N"):
             parse_cluster(bad)
 
 

@@ -13,9 +13,9 @@ from plan_bridge.study import (
     read_results,
     run_study,
     summarise_results,
-    wilson,
     write_report,
 )
+from plan_bridge.study.runs import FIELDS
 
 ROOMS = str(Path(__file__).parents[1] / "data" / "rooms")
 
@@ -58,25 +58,74 @@ def test_a_killed_study_keeps_finished_rows_and_a_torn_row_is_rerun(tmp_path: Pa
     assert len(complete) == 4
 
 
-def test_wilson_interval_brackets_the_proportion() -> None:
-    low, high = wilson(18, 20)
-    assert 0.68 < low < 0.9 < high < 0.98
-    assert wilson(0, 0) == (0.0, 0.0)
-
-
 @pytest.mark.timeout(300)
-def test_report_has_summary_plots_and_findings(tmp_path: Path) -> None:
+def test_report_records_setup_compares_approaches_and_captions_every_plot(tmp_path: Path) -> None:
     rows = run_study(specs(range(2)), tmp_path, jobs=2)
     summary = summarise_results(rows)
     planned = [s for s in summary if s["approach"] == "planned" and s["fault_rate"] == 0.5]
     assert planned[0]["runs"] == 2
-    report = write_report(rows, tmp_path, authoring_cost(ROOMS), "plan-bridge study rooms")
+    report = write_report(
+        rows,
+        tmp_path,
+        authoring_cost(ROOMS),
+        "plan-bridge study rooms",
+        fault_models={"rooms": {"step-fails": 1.0}},
+    )
     text = report.read_text()
     assert "## Findings" in text and "fault rate 0.5" in text
-    for name in (
-        "summary.csv",
-        "authoring.csv",
-        "success_vs_fault_rate.png",
-        "time_and_actions.png",
-    ):
+    # setup: versions, machine, seeds, fault model, runs per cell
+    assert "unified-planning " in text and "fast-downward (up-fast-downward " in text
+    assert "CPUs" in text and "seeds 0-1" in text and "runs per cell" in text
+    assert "| rooms | step-fails | 1 |" in text
+    # comparisons with tests and p-values
+    assert "Fisher exact" in text and "Mann-Whitney U" in text and "p (Holm)" in text
+    with (tmp_path / "comparisons.csv").open() as f:
+        comparisons = list(csv.DictReader(f))
+    assert {c["metric"] for c in comparisons} == {"success", "wall_time", "sim_time"}
+    assert all(c["approach"] == "no-replan" for c in comparisons)
+    # every plot as PNG at 200 dpi and SVG, with a caption saying what is averaged
+    for stem in ("success_vs_fault_rate", "time_per_run", "planning_share_and_absorption"):
+        assert (tmp_path / f"{stem}.svg").read_text().lstrip().startswith("<?xml")
+        assert "![" in text and f"({stem}.png)" in text
+        assert round(png_dpi(tmp_path / f"{stem}.png")) >= 200
+    assert "nothing is averaged" in text and "averaged over all runs" in text
+    for name in ("summary.csv", "authoring.csv"):
         assert (tmp_path / name).stat().st_size > 0
+
+
+def png_dpi(path: Path) -> float:
+    """Horizontal resolution from the PNG's pHYs chunk (pixels per metre -> dpi)."""
+    import struct
+
+    data = path.read_bytes()
+    at = data.index(b"pHYs")
+    per_metre, _, unit = struct.unpack(">IIB", data[at + 4 : at + 13])
+    assert unit == 1
+    return per_metre * 0.0254
+
+
+def test_cells_without_a_successful_run_say_n_a_not_zero(tmp_path: Path) -> None:
+    rows = [
+        {f: "" for f in FIELDS}
+        | {
+            "target": "rooms",
+            "approach": approach,
+            "fault_rate": "0.5",
+            "seed": str(seed),
+            "outcome": "succeeded" if approach == "planned" else "aborted",
+            "goal_reached": str(approach == "planned"),
+            "wall_time_s": "0.5",
+            "sim_time_s": "10",
+        }
+        for approach in ("planned", "no-replan")
+        for seed in range(3)
+    ]
+    summary = {s["approach"]: s for s in summarise_results(rows)}
+    assert summary["no-replan"]["mean_sim_time_s"] == "n/a"
+    assert summary["no-replan"]["median_wall_time_s"] == "n/a"
+    assert summary["planned"]["mean_sim_time_s"] == 10.0
+    text = write_report(rows, tmp_path, [], "plan-bridge study rooms").read_text()
+    no_replan = [line for line in text.splitlines() if line.startswith("| rooms | no-replan |")]
+    assert no_replan and all("n/a" in line and "0.000 |" not in line for line in no_replan)
+    times = [line for line in text.splitlines() if "| wall_time |" in line]
+    assert times and "| n/a | n/a |" in times[0]

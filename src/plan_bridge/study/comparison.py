@@ -1,0 +1,139 @@
+"""Approaches compared with a reference approach, cell by cell, with intervals and p-values.
+
+A *cell* is (target, variant, fault rate). In each cell every approach is compared
+with the reference (``planned`` by default) on three metrics:
+
+- success rate: both rates with Wilson intervals, the difference with Newcombe's
+  interval, Fisher's exact test;
+- wall time and simulated robot time of successful runs: both medians with
+  order-statistic intervals, the Mann-Whitney U test. Only successful runs are
+  compared (a failed run stops early, so its time is not the cost of the mission);
+  the success rate comparison above is what accounts for the failures. Where either
+  approach has no successful run the comparison is "n/a".
+
+p-values are two-sided; ``p_holm`` adjusts them with Holm's method over the whole
+table (every metric, cell and approach), for a reader who wants one family.
+"""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from collections.abc import Iterable
+from typing import Any
+
+from plan_bridge.study.statistics import (
+    fisher_exact,
+    holm,
+    mann_whitney_u,
+    median_ci,
+    newcombe,
+    wilson,
+)
+
+__all__ = ["METRICS", "compare_approaches", "format_p"]
+
+#: metric name -> (column of results.csv, label)
+METRICS = {
+    "success": ("goal_reached", "goal reached (%)"),
+    "wall_time": ("wall_time_s", "wall time of successful runs (s)"),
+    "sim_time": ("sim_time_s", "simulated time of successful runs (s)"),
+}
+
+
+def _float(value: str) -> float:
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return 0.0
+
+
+def format_p(p: float | str) -> str:
+    if isinstance(p, str):
+        return p
+    return "<0.0001" if p < 1e-4 else f"{p:.4f}"
+
+
+def _time_comparison(ref: list[float], other: list[float]) -> dict[str, Any]:
+    if not ref or not other:
+        return {"reference": "n/a", "other": "n/a", "difference": "n/a", "test": "", "p": "n/a"}
+    rm, rl, rh = median_ci(ref)
+    om, ol, oh = median_ci(other)
+    _, p = mann_whitney_u(ref, other)
+    return {
+        "reference": f"{rm:.3g} [{rl:.3g}, {rh:.3g}]",
+        "other": f"{om:.3g} [{ol:.3g}, {oh:.3g}]",
+        "difference": f"{rm - om:+.3g} (medians)",
+        "test": "Mann-Whitney U",
+        "p": p,
+    }
+
+
+def compare_approaches(
+    rows: Iterable[dict[str, str]], reference: str = "planned"
+) -> list[dict[str, Any]]:
+    """One row per (cell, approach other than ``reference``, metric)."""
+    cells: dict[tuple[str, str, float], dict[str, list[dict[str, str]]]] = defaultdict(
+        lambda: defaultdict(list)
+    )
+    for row in rows:
+        cell = (row["target"], row["variant"], _float(row["fault_rate"]))
+        cells[cell][row["approach"]].append(row)
+    out: list[dict[str, Any]] = []
+    for (target, variant, rate), by_approach in sorted(cells.items()):
+        ref_rows = by_approach.get(reference)
+        if not ref_rows:
+            continue
+        for approach, other_rows in by_approach.items():
+            if approach == reference:
+                continue
+            base = {
+                "target": target,
+                "variant": variant,
+                "fault_rate": rate,
+                "reference": reference,
+                "approach": approach,
+            }
+            rs = sum(1 for r in ref_rows if r["goal_reached"] == "True")
+            os_ = sum(1 for r in other_rows if r["goal_reached"] == "True")
+            rn, on = len(ref_rows), len(other_rows)
+            rl, rh = wilson(rs, rn)
+            ol, oh = wilson(os_, on)
+            dl, dh = newcombe(rs, rn, os_, on)
+            out.append(
+                {
+                    **base,
+                    "metric": "success",
+                    "n_reference": rn,
+                    "n_approach": on,
+                    "value_reference": f"{100 * rs / rn:.0f}% [{100 * rl:.0f}, {100 * rh:.0f}]",
+                    "value_approach": f"{100 * os_ / on:.0f}% [{100 * ol:.0f}, {100 * oh:.0f}]",
+                    "difference": f"{100 * (rs / rn - os_ / on):+.0f} pp [{100 * dl:+.0f}, {100 * dh:+.0f}]",
+                    "test": "Fisher exact",
+                    "p": fisher_exact(rs, rn - rs, os_, on - os_),
+                }
+            )
+            for metric in ("wall_time", "sim_time"):
+                column = METRICS[metric][0]
+                ref = [_float(r[column]) for r in ref_rows if r["goal_reached"] == "True"]
+                other = [_float(r[column]) for r in other_rows if r["goal_reached"] == "True"]
+                result = _time_comparison(ref, other)
+                out.append(
+                    {
+                        **base,
+                        "metric": metric,
+                        "n_reference": len(ref),
+                        "n_approach": len(other),
+                        "value_reference": result["reference"],
+                        "value_approach": result["other"],
+                        "difference": result["difference"],
+                        "test": result["test"],
+                        "p": result["p"],
+                    }
+                )
+    tested = [i for i, c in enumerate(out) if isinstance(c["p"], float)]
+    adjusted = holm([out[i]["p"] for i in tested])
+    for c in out:
+        c["p_holm"] = "n/a"
+    for i, p in zip(tested, adjusted, strict=True):
+        out[i]["p_holm"] = p
+    return out
