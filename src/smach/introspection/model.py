@@ -24,7 +24,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-__all__ = ["History", "ViewModel", "active_at", "fold"]
+__all__ = ["History", "ViewModel", "active_at", "fold", "graft"]
 
 MAX_ERRORS = 50
 MAX_DECISIONS = 200
@@ -150,8 +150,13 @@ class ViewModel:
     def _structure(self, path: str, record: Mapping[str, Any]) -> None:
         tree = record.get("structure")
         if isinstance(tree, Mapping):
-            self.structure = dict(tree)
+            self.structure = graft(self.structure, dict(tree), path)
             self.structure_version += 1
+            # The machine that was at ``path`` is gone: nothing of it is active any more.
+            if path and self.structure is not None and path != self.structure.get("path"):
+                prefix = path + "/"
+                for gone in [p for p in self.active if p.startswith(prefix)]:
+                    del self.active[gone]
 
     def _resync(self, path: str, record: Mapping[str, Any]) -> None:
         active = record.get("active")
@@ -310,6 +315,32 @@ _HANDLERS = {
     "step_finished": ViewModel._step_finished,
     "observations_applied": ViewModel._observations,
 }
+
+
+def graft(tree: dict[str, Any] | None, subtree: dict[str, Any], path: str = "") -> dict[str, Any]:
+    """``tree`` with the node at ``path`` replaced by ``subtree`` (a new tree; ``tree`` is
+    not changed). No ``path``, the root's path, or no ``tree``: ``subtree`` is the tree.
+    A path whose node is missing is added to its parent's children."""
+    if tree is None or not path or path == tree.get("path"):
+        return subtree
+    if not path.startswith(str(tree.get("path", "")) + "/"):
+        return tree  # not part of this tree: keep what is drawn
+    return _graft(tree, subtree, path)
+
+
+def _graft(node: dict[str, Any], subtree: dict[str, Any], path: str) -> dict[str, Any]:
+    children = list(node.get("children", ()))
+    for i, child in enumerate(children):
+        child_path = str(child.get("path", ""))
+        if child_path == path:
+            children[i] = subtree
+            return {**node, "children": children}
+        if path.startswith(child_path + "/"):
+            children[i] = _graft(child, subtree, path)
+            return {**node, "children": children}
+    if path.rsplit("/", 1)[0] == node.get("path"):
+        return {**node, "is_container": True, "children": [*children, subtree]}
+    return node  # its parent is not drawn either
 
 
 def fold(

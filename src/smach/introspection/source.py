@@ -36,6 +36,8 @@ from typing import Any, Protocol, runtime_checkable
 
 from smach.introspection.events import Capture, CaptureListener
 from smach.introspection.journal import capture_record, summarise
+from smach.introspection.journal_lines import StructureItem
+from smach.introspection.journal_structures import MachineTracker
 from smach.introspection.structure import snapshot
 from smach.state import State
 
@@ -105,7 +107,10 @@ class LiveSource:
         self._allowance = float(burst)
         self._last_poll = time.monotonic()
         self._pending: collections.deque[Capture] = collections.deque(maxlen=buffer)
-        self._listener = CaptureListener(self._pending.append, self._pending.extend)
+        # Single events go through the tracker: a container that starts for the first
+        # time (a new plan) has its tree queued before its start (see journal_structures).
+        self._tracker = MachineTracker(root, self._pending.append, written=True)
+        self._listener = CaptureListener(self._tracker, self._pending.extend)
         self._known: set[str] = set()
         self._last_userdata: dict[str, str] = {}
         self._next_userdata = 0.0
@@ -129,7 +134,7 @@ class LiveSource:
         overflow = len(pending) >= (pending.maxlen or 0)
         # Take what is there (n x popleft, in C; appends may go on meanwhile).
         count = len(pending)
-        captures: list[Capture] = list(
+        captures: list[Any] = list(  # captures and StructureItems
             itertools.starmap(pending.popleft, itertools.repeat((), count))
         )
         records: list[dict[str, Any]] = []
@@ -146,6 +151,12 @@ class LiveSource:
         self._allowance = max(0.0, allowance - len(captures))
         known = self._known
         for capture in captures:
+            if type(capture) is StructureItem:
+                records.append(capture.record())
+                prefix = capture.path + "/"
+                known.difference_update([p for p in known if p.startswith(prefix)])
+                known.update(node.path for node in capture.node.walk())
+                continue
             path = capture[1]
             if path not in known:
                 records.append(self._structure_record(path))

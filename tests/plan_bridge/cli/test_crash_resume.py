@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from smach.introspection.journal import read_journal
+from smach.introspection.journal import read_journal, read_states
 
 ROOMS = Path(__file__).parents[1] / "data" / "rooms"
 
@@ -59,7 +59,7 @@ def test_a_run_killed_at_any_point_resumes_to_the_goal_without_redoing_finished_
     if not _kill_after_lines(journal, lines, seed=4):
         pytest.skip("the run finished before the kill point")
     header, before = read_journal(journal)
-    checkpoints = [r for r in before if r["kind"] == "checkpoint"]
+    checkpoints = read_states(before, "checkpoint")
     done_before = len(checkpoints[-1]["state"]["report"]["executed"]) if checkpoints else 0
     first_after = checkpoints[-1]["state"]["first_index"] if checkpoints else 1
 

@@ -29,6 +29,7 @@ from plan_bridge.missions.mission import Target, load_target
 from plan_bridge.planning.planner import get_planner
 from plan_bridge.ros import remote_facts
 from plan_bridge.ros.connection import RobotConnection, RobotError
+from smach.introspection.journal import read_states
 
 pytestmark = pytest.mark.ros
 
@@ -252,6 +253,6 @@ def test_plan_bridge_run_ros_json_exits_0(tmp_path: Path) -> None:
     assert wait_for(lambda: not Path(f"/proc/{pid}").exists(), 5)
     # Journal checkpoints of a --ros run hold no world snapshot (it is on the robot).
     records = [json.loads(line) for line in (tmp_path / "run.jsonl").read_text().splitlines()]
-    checkpoints = [r for r in records if r.get("kind") == "checkpoint"]
-    assert checkpoints and all(r.get("world") is None for r in checkpoints)
+    checkpoints = read_states(records, "checkpoint")
+    assert checkpoints and all("world" in r and r["world"] is None for r in checkpoints)
     print(f"\nplan-bridge run --ros --json: {elapsed:.2f} s")

@@ -182,12 +182,14 @@ def test_a_client_that_never_reads_does_not_slow_execution() -> None:
         assert viewer.history.total >= 100
 
 
-def test_live_source_listener_is_a_bounded_deque_append() -> None:
+def test_live_source_listener_fills_a_bounded_deque() -> None:
     sm = chain_machine(300)
     source = LiveSource(sm, buffer=32)
-    assert source._listener.capture == source._pending.append
+    # Steps go straight to the deque; single events through the tracker of new machines.
+    assert source._listener.capture_many == source._pending.extend
+    assert source._listener.capture.queue == source._pending.append
     assert source._listener in sm._bus.listeners
-    assert sm._bus.sinks == (source._pending.append,) and sm._bus.event_listeners == ()
+    assert sm._bus.sinks == (source._listener.capture,) and sm._bus.event_listeners == ()
     sm.execute()
     assert len(source._pending) == 32  # the oldest events were dropped, nobody waited
     records = source.poll()

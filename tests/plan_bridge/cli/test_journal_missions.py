@@ -1,0 +1,58 @@
+"""The journal rules hold for every shipped mission, across replans, retries and
+concurrent layers (resumes: test_crash_resume.py checks the same rules)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from plan_bridge.cli import main
+from smach.introspection.fidelity import journal_problems
+from smach.introspection.journal import read_journal
+
+DOMAINS = Path(__file__).parents[3] / "domains"
+
+# (domain, seed): runs with at least one fault and a recovery at fail rate 0.2.
+RUNS = [
+    ("fetch_drink", 1),
+    ("table_clearing", 1),
+    ("recharge", 1),
+    ("door_opening", 1),
+    ("two_robot_delivery", 0),  # concurrent layers (the mission runs them so)
+    ("two_robot_delivery", 1),
+]
+
+
+@pytest.mark.timeout(300)
+@pytest.mark.parametrize(("domain", "seed"), RUNS)
+def test_every_event_of_a_mission_journal_refers_to_the_structure_in_force_and_replays_exactly(
+    tmp_path: Path, domain: str, seed: int, capsys: pytest.CaptureFixture[str]
+) -> None:
+    journal = tmp_path / "run.jsonl"
+    main(
+        [
+            "run",
+            str(DOMAINS / domain),
+            "--seed",
+            str(seed),
+            "--fail-rate",
+            "0.2",
+            "--journal",
+            str(journal),
+            "--quiet",
+            "--json",
+        ]
+    )
+    report = json.loads(capsys.readouterr().out)
+    assert report["replans"] + report["retries"] + report["repairs"] >= 1  # it recovered
+    assert journal_problems(journal) == []
+    _, records = read_journal(journal)
+    structures = [r for r in records if r["kind"] == "structure"]
+    # One structure per plan machine, written when it starts, and nothing else.
+    plan_starts = [
+        r for r in records if r["kind"] == "container_started" and r["path"] == "/ROOT/PLAN"
+    ]
+    assert [r["path"] for r in structures] == ["/ROOT/PLAN"] * len(plan_starts)
+    assert [r["time"] for r in structures] == [r["time"] for r in plan_starts]
