@@ -18,13 +18,13 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from smach.ros.action_server_wrapper import ActionServerWrapper
     from smach.ros.condition_state import ConditionState
-    from smach.ros.default_node import default_node, shutdown_default_node
     from smach.ros.executor import SmachExecutor
     from smach.ros.introspection import IntrospectionClient, IntrospectionServer
     from smach.ros.monitor_state import MonitorState
     from smach.ros.preempt_handler import set_preempt_handler
     from smach.ros.ros_state import RosState, SmachNode
     from smach.ros.service_state import ServiceState
+    from smach.ros.shared_node import default_node, shutdown_default_node
     from smach.ros.simple_action_state import SimpleActionState
 
 #: Public name -> the submodule defining it (imported, with rclpy, on first use).
@@ -39,9 +39,9 @@ LAZY_NAMES = {
     "SimpleActionState": "simple_action_state",
     "SmachExecutor": "executor",
     "SmachNode": "ros_state",
-    "default_node": "default_node",
+    "default_node": "shared_node",
     "set_preempt_handler": "preempt_handler",
-    "shutdown_default_node": "default_node",
+    "shutdown_default_node": "shared_node",
 }
 
 __all__ = [

@@ -25,8 +25,8 @@ from typing import Any
 import smach
 from smach.introspection.events import Event, Transition, UserdataWritten
 from smach.ros._api import ActionServer, CancelResponse, GoalResponse
-from smach.ros.default_node import node_optional
 from smach.ros.executor import SmachExecutor
+from smach.ros.shared_node import node_optional
 
 __all__ = ["ActionServerWrapper"]
 

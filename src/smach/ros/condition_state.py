@@ -7,9 +7,9 @@ from collections.abc import Callable, Iterable
 from typing import Any
 
 import smach
-from smach.ros.default_node import node_optional
 from smach.ros.executor import seconds
 from smach.ros.ros_state import RosState
+from smach.ros.shared_node import node_optional
 
 __all__ = ["ConditionState"]
 
@@ -22,7 +22,7 @@ class ConditionState(RosState):
     * ROS 2: ``ConditionState(node, cond_cb, input_keys, poll_rate=20.0, timeout, max_checks)``
       with ``poll_rate`` in Hz;
     * ROS 1: ``ConditionState(cond_cb, input_keys, poll_rate=0.05, timeout, max_checks)``
-      (no node: the default node, see :mod:`smach.ros.default_node`) with
+      (no node: the default node, see :mod:`smach.ros.shared_node`) with
       ``poll_rate`` the *period* between checks, in seconds, as ``rospy.sleep``
       took it.
 

@@ -48,13 +48,13 @@ from smach.ros._api import (
     StringMsg,
     rclpy,
 )
-from smach.ros.default_node import ensure_init
 from smach.ros.executor import (
     SmachExecutor,
     publisher_events,
     seconds,
     subscription_events,
 )
+from smach.ros.shared_node import ensure_init
 
 __all__ = [
     "FORMAT",
@@ -126,15 +126,26 @@ class IntrospectionServer(Node):  # type: ignore[misc]
         topic_base = _topic_base(server_name)
         if node is not None:
             context = node.context
-        context = ensure_init(context)
-        super().__init__(_node_name(topic_base), context=context)
+        # Set before the node exists: rclpy may destroy a half-built server at shutdown.
+        self._running = False
+        self._thread: threading.Thread | None = None
+        self._status_pub: Any = None
+        self._structure_pub: Any = None
+        super().__init__(_node_name(topic_base), context=ensure_init(context))
         self.server_name = topic_base
         self._state = state
         self._root_path = path.rstrip("/") or "/"
         self._period = seconds(update_rate, "update_rate", allow_none=False) or 2.0
         self._node = self if node is None else node
         self._helper = SmachExecutor.for_node(self._node)
-        base = self._node.resolve_topic_name(self.server_name)
+        try:
+            base = self._node.resolve_topic_name(self.server_name)
+        except Exception as exc:
+            super().destroy_node()
+            raise smach.InvalidStateError(
+                f"introspection server name {server_name!r} is not a valid ROS topic name "
+                f"(letters, digits, '_' and '/'): {exc}"
+            ) from exc
         self.status_topic = base + STATUS_TOPIC
         self.structure_topic = base + STRUCTURE_TOPIC
         self._containers: dict[str, tuple[smach.Container, str]] = {}
@@ -142,10 +153,6 @@ class IntrospectionServer(Node):  # type: ignore[misc]
         self._structure_dirty: set[str] = set()
         self._lock = threading.Lock()
         self._wake = threading.Event()
-        self._running = False
-        self._thread: threading.Thread | None = None
-        self._status_pub: Any = None
-        self._structure_pub: Any = None
         self.published = 0
 
     # -- life cycle -----------------------------------------------------------------------

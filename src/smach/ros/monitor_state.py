@@ -21,9 +21,9 @@ from collections.abc import Callable, Iterable
 from typing import Any
 
 import smach
-from smach.ros.default_node import node_optional
 from smach.ros.executor import seconds, subscription_events
 from smach.ros.ros_state import RosState
+from smach.ros.shared_node import node_optional
 
 __all__ = ["MonitorState"]
 

@@ -16,9 +16,9 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any
 
 import smach
-from smach.ros.default_node import node_optional
 from smach.ros.executor import seconds
 from smach.ros.ros_state import POLL_PERIOD, RosState
+from smach.ros.shared_node import node_optional
 
 __all__ = ["ServiceState"]
 

@@ -6,15 +6,16 @@ port put an rclpy node first in every constructor. Both forms are accepted here.
 When a state gets no node (the ROS 1 form, or ``node=None``), it uses the
 *default node*:
 
-* one per process, named ``smach_ros_<pid>``, in rclpy's default context;
-* created on first use; if nobody has called ``rclpy.init()`` yet, it is called
-  then (without arguments), and smach remembers that it did;
+* one per process, named ``smach_ros_<pid>``, created on first use;
+* in rclpy's default context if the program has called ``rclpy.init()``; if not,
+  in a context smach creates and initialises then (not the default one, so the
+  program may still call ``rclpy.init()`` later; ``rclpy.ok()`` tells about the
+  default context only);
 * spun by smach's helper executor (:mod:`smach.ros.executor`), so its parameter
   services answer without you spinning anything;
-* shut down cleanly: forgotten when the default context shuts down
-  (``rclpy.shutdown()``); destroyed by :func:`shutdown_default_node` and at
-  interpreter exit, which also call ``rclpy.shutdown()`` if it was smach that
-  initialised rclpy (if you called ``rclpy.init()``, shutting down stays yours).
+* shut down cleanly: forgotten when its context shuts down (``rclpy.shutdown()``);
+  destroyed by :func:`shutdown_default_node` and at interpreter exit, which also
+  shut down the context smach initialised (a context you initialised stays yours).
 
 Names given to states without a node resolve against the default node, i.e. the
 root namespace unless ``--ros-args`` remapping rules say otherwise.
@@ -35,6 +36,7 @@ __all__ = ["default_node", "ensure_init", "is_node", "node_optional", "shutdown_
 
 _lock = threading.RLock()
 _node: Any = None
+_own_context: Any = None
 #: Contexts smach initialised itself (ids), to shut down at exit.
 _initialised: dict[int, Any] = {}
 
@@ -47,18 +49,35 @@ def is_node(value: object) -> bool:
 
 
 def ensure_init(context: Any = None) -> Any:
-    """Return ``context`` (default: rclpy's default context), calling ``rclpy.init`` if needed.
+    """An initialised rclpy context: ``context`` (initialised if needed), else a default.
 
-    ROS 1 scripts called ``rospy.init_node`` themselves; ported scripts often call
-    ``rclpy.init()`` only where they create their own node, or not at all.
+    Without ``context``: rclpy's default context if the program has called
+    ``rclpy.init()``, else a context of smach's own, initialised here. ROS 1
+    scripts called ``rospy.init_node`` themselves; ported scripts often call
+    ``rclpy.init()`` late or not at all. smach does not initialise the *default*
+    context itself, so a later ``rclpy.init()`` in the program still works.
     """
-    if context is None:
-        context = rclpy.get_default_context()
+    global _own_context
     with _lock:
-        if not context.ok():
-            rclpy.init(context=context)
-            _initialised[id(context)] = context
-    return context
+        if context is not None:
+            if not context.ok():
+                try:
+                    rclpy.init(context=context)
+                except RuntimeError as exc:
+                    raise RuntimeError(
+                        f"cannot initialise the given rclpy context (was it shut down? "
+                        f"create a new rclpy.Context): {exc}"
+                    ) from exc
+                _initialised[id(context)] = context
+            return context
+        default = rclpy.get_default_context()
+        if default.ok():
+            return default
+        if _own_context is None or not _own_context.ok():
+            _own_context = rclpy.Context()
+            rclpy.init(context=_own_context)
+            _initialised[id(_own_context)] = _own_context
+        return _own_context
 
 
 def default_node() -> Any:

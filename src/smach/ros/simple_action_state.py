@@ -28,9 +28,9 @@ from typing import Any
 
 import smach
 from smach.ros._api import ActionClient, GoalStatus
-from smach.ros.default_node import node_optional
 from smach.ros.executor import seconds
 from smach.ros.ros_state import RosState
+from smach.ros.shared_node import node_optional
 
 __all__ = ["SimpleActionState"]
 

@@ -1,6 +1,7 @@
 #!/usr/bin/env python
 # ruff: noqa
 """A patrol loop with userdata remapping and an introspection server (ROS 1 era)."""
+
 import rospy
 import smach
 import smach_ros
@@ -8,42 +9,46 @@ import smach_ros
 
 class Patrol(smach.State):
     def __init__(self):
-        smach.State.__init__(self, outcomes=['tired', 'continue'],
-                             input_keys=['laps_in'], output_keys=['laps_out'])
+        smach.State.__init__(
+            self, outcomes=["tired", "continue"], input_keys=["laps_in"], output_keys=["laps_out"]
+        )
 
     def execute(self, userdata):
-        rospy.loginfo('Patrolling lap %d' % userdata.laps_in)
+        rospy.loginfo("Patrolling lap %d" % userdata.laps_in)
         userdata.laps_out = userdata.laps_in + 1
         if userdata.laps_in < 3:
-            return 'continue'
-        return 'tired'
+            return "continue"
+        return "tired"
 
 
 class Recharge(smach.State):
     def __init__(self):
-        smach.State.__init__(self, outcomes=['charged'], input_keys=['laps'])
+        smach.State.__init__(self, outcomes=["charged"], input_keys=["laps"])
 
     def execute(self, userdata):
-        rospy.loginfo('Recharging after %d laps' % userdata.laps)
+        rospy.loginfo("Recharging after %d laps" % userdata.laps)
         rospy.sleep(0.01)
-        return 'charged'
+        return "charged"
 
 
 def main():
-    rospy.init_node('port_patrol')
-    sm = smach.StateMachine(outcomes=['finished'])
+    rospy.init_node("port_patrol")
+    sm = smach.StateMachine(outcomes=["finished"])
     sm.userdata.laps = 0
     with sm:
-        smach.StateMachine.add('PATROL', Patrol(),
-                               transitions={'continue': 'PATROL', 'tired': 'RECHARGE'},
-                               remapping={'laps_in': 'laps', 'laps_out': 'laps'})
-        smach.StateMachine.add('RECHARGE', Recharge(), transitions={'charged': 'finished'})
-    sis = smach_ros.IntrospectionServer('port_patrol_server', sm, '/SM_ROOT')
+        smach.StateMachine.add(
+            "PATROL",
+            Patrol(),
+            transitions={"continue": "PATROL", "tired": "RECHARGE"},
+            remapping={"laps_in": "laps", "laps_out": "laps"},
+        )
+        smach.StateMachine.add("RECHARGE", Recharge(), transitions={"charged": "finished"})
+    sis = smach_ros.IntrospectionServer("port_patrol_server", sm, "/SM_ROOT")
     sis.start()
     outcome = sm.execute()
     sis.stop()
-    print('outcome: %s laps: %d' % (outcome, sm.userdata.laps))
+    print("outcome: %s laps: %d" % (outcome, sm.userdata.laps))
 
 
-if __name__ == '__main__':
+if __name__ == "__main__":
     main()
