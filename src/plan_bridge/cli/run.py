@@ -383,9 +383,11 @@ def _summary(outcome: str | None, report: Any, faults: int | None) -> str:
     return (
         f"summary: {outcome}{' (goal reached)' if report.goal_reached else ' (goal NOT reached)'}; "
         f"{report.actions_executed} actions ({report.actions_failed} failed){fault_text}; "
-        f"{report.retries} retries, {report.continues} continues, "
+        f"{report.retries} retries, {report.variants_tried} skill variants, "
+        f"{report.continues} continues, "
         f"{report.repairs} repairs ({report.repair_attempts} tried), "
-        f"{report.replans} replans; {report.planner_calls} planner calls, "
+        f"{report.replans} replans ({report.holds} held the plan); "
+        f"{report.planner_calls} planner calls, {report.plans_reused} plans reused, "
         f"planning {report.planning_time_s:.2f} s, execution {report.execution_time_s:.2f} s, "
         f"total {report.total_time_s:.2f} s"
         + (f"\n  reason: {report.explanation}" if not report.goal_reached else "")

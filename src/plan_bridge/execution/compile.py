@@ -193,15 +193,17 @@ def compile_plan(
     concurrent: bool = False,
     check_preconditions: bool = True,
     on_finished: Callable[[StepRecord], None] | None = None,
+    variants: Mapping[int, str] | None = None,
 ) -> CompiledPlan:
-    """Build the SMACH machine that executes ``steps`` (numbered from ``first_index``)."""
+    """Build the SMACH machine that executes ``steps`` (numbered from ``first_index``);
+    ``variants`` maps a position in ``steps`` to the skill variant it runs."""
     steps = list(steps)
     width = max(2, len(str(first_index + len(steps))))
     labels = [step_label(first_index + i, s, width) for i, s in enumerate(steps)]
     states: list[StepState] = []
     for i, step in enumerate(steps):
         ground = model.ground(step)
-        skill_state, skill = skills.create(step)
+        skill_state, skill = skills.create(step, (variants or {}).get(i))
         state = StepState(
             first_index + i,
             ground,

@@ -83,6 +83,7 @@ class Executive(smach.Container):
         self.report = ExecutionReport()
         self._compiled: CompiledPlan | None = None
         self._replanner: Replanner | None = None
+        self._recovery: Recovery | None = None
         self._running = False
         self._records: dict[int, StepRecord] = {}
 
@@ -178,8 +179,8 @@ class Executive(smach.Container):
                 self._plan_computed,
             )
         replanner.start(self.report)
-        recovery = Recovery(
-            self.model, self.policy, self.belief, replanner, self.report, self._decide
+        recovery = self._recovery = Recovery(
+            self.model, self.policy, self.belief, replanner, self.report, self._decide, self.skills
         )
         self._sense()
         if self.model.goal_holds(self.belief.facts):
@@ -232,6 +233,7 @@ class Executive(smach.Container):
             concurrent=self.concurrent,
             check_preconditions=self.check_preconditions,
             on_finished=self._step_finished,
+            variants=self._recovery.variants_of(plan) if self._recovery is not None else None,
         )
         self._compiled = compiled
         compiled.machine._parent = self
@@ -321,6 +323,7 @@ class Executive(smach.Container):
             "actions_executed",
             "actions_failed",
             "retries",
+            "variants_tried",
             "continues",
             "repairs",
             "replans",

@@ -17,6 +17,9 @@ class ReplanPolicy:
     max_step_retries: int = 2
     """Retries of one failed step while the held plan (that step included) is still
     valid from the belief: a fault that left the world as it was."""
+    try_variants: bool = True
+    """Then switch to another variant of the step's skill (``SkillRegistry.register(...,
+    variant=...)``) while the held plan is still valid, each variant once."""
     continue_if_valid: bool = True
     """Skip ahead when the rest of the plan is valid from the belief."""
     repair: bool = True
@@ -71,13 +74,22 @@ class ReplanPolicy:
             "full": cls(),
             "repair-first": cls(),
             "no-replan": cls(
-                max_step_retries=0, continue_if_valid=False, repair=False, replan=False
+                max_step_retries=0,
+                try_variants=False,
+                continue_if_valid=False,
+                repair=False,
+                replan=False,
             ),
             "retry-only": cls(
-                continue_if_valid=False, repair=False, replan=False, max_step_retries=3
+                continue_if_valid=False,
+                try_variants=False,
+                repair=False,
+                replan=False,
+                max_step_retries=3,
             ),
             "replan-only": cls(
                 max_step_retries=0,
+                try_variants=False,
                 continue_if_valid=False,
                 repair=False,
                 hold_valid_plan=False,
@@ -102,6 +114,8 @@ class ExecutionReport:
     actions_executed: int = 0
     actions_failed: int = 0
     retries: int = 0
+    variants_tried: int = 0
+    """Failed steps run again with another variant of their skill."""
     continues: int = 0
     repairs: int = 0
     repair_attempts: int = 0

@@ -7,7 +7,8 @@ In order, within the policy's budgets:
    failed step (its effects came true anyway, e.g. a door somebody else opened);
 2. **retry** the step while the held plan, that step included, is still valid from
    the belief (a fault that left the world as it was: no planner can do better than
-   the plan in force), at most ``max_step_retries`` times per step and plan;
+   the plan in force), at most ``max_step_retries`` times per step and plan; then
+   run it with another **variant** of its skill, each variant once;
 3. **repair** (STRIPS-style plans): regress the goal through the rest of the plan to
    the facts it needs, plan only a prefix that re-establishes the broken ones, and
    keep ``prefix + rest`` if it is valid and short;
@@ -28,6 +29,7 @@ from plan_bridge.execution.semantics import ActionModel
 from plan_bridge.execution.world import WorldState
 from plan_bridge.pddl.task import Fact, format_fact
 from plan_bridge.planning.planner import PlanStep
+from plan_bridge.skills.registry import SkillRegistry
 
 __all__ = ["Recovery"]
 
@@ -45,7 +47,9 @@ class Recovery:
         replanner: Replanner,
         report: ExecutionReport,
         decide: Decide,
+        skills: SkillRegistry | None = None,
     ) -> None:
+        self.skills = skills
         self.model = model
         self.policy = policy
         self.belief = belief
@@ -55,6 +59,9 @@ class Recovery:
         #: Plans adopted so far: retries are counted per step of the plan in force.
         self.generation = 0
         self._retry_counts: dict[tuple[int, str], int] = {}
+        #: The skill variant each ground step runs with from now on (by ``str(step)``).
+        self.variant_for: dict[str, str] = {}
+        self._variants_tried: dict[str, list[str]] = {}
 
     def recover(
         self, rest: list[PlanStep], reason: str, record: StepRecord | None
@@ -90,6 +97,16 @@ class Recovery:
                     "retry", f"{reason}; the plan, this step included, is still valid", str(failed)
                 )
                 return rest
+            variant = self._next_variant(failed) if held_valid and policy.try_variants else None
+            if variant is not None and record is not None and record.outcome == "aborted":
+                self.variant_for[str(failed)] = variant
+                report.variants_tried += 1
+                self.decide(
+                    "variant",
+                    f"{reason}; the plan is still valid: trying the skill variant {variant!r}",
+                    str(failed),
+                )
+                return rest
             if policy.repair:
                 repaired = self._repair(rest, reason)
                 if repaired is not None:
@@ -117,6 +134,23 @@ class Recovery:
             )
             return rest
         raise MissionEnded("aborted", no_plan)
+
+    def variants_of(self, plan: list[PlanStep]) -> dict[int, str]:
+        """Position in ``plan`` -> the skill variant that step runs with."""
+        chosen = self.variant_for
+        if not chosen:
+            return {}
+        return {i: chosen[str(s)] for i, s in enumerate(plan) if str(s) in chosen}
+
+    def _next_variant(self, step: PlanStep) -> str | None:
+        if self.skills is None:
+            return None
+        tried = self._variants_tried.setdefault(str(step), [])
+        for name in self.skills.variants(step.action):
+            if name not in tried:
+                tried.append(name)
+                return name
+        return None
 
     def _repair(self, rest: list[PlanStep], reason: str) -> list[PlanStep] | None:
         """Plan a prefix that re-establishes what ``rest`` needs; None if that does not fit."""

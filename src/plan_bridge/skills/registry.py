@@ -53,6 +53,8 @@ class Skill:
     action: str
     factory: SkillFactory
     outcome_map: Mapping[str, str] = field(default_factory=dict)
+    variant: str = ""
+    """The variant's name; ``""`` for the action's main skill."""
 
     def map_outcome(self, outcome: str) -> str:
         return self.outcome_map.get(outcome, outcome)
@@ -97,16 +99,39 @@ class SkillRegistry:
 
     def __init__(self, fallback: Callable[[PlanStep], smach.State] | None = None) -> None:
         self._skills: dict[str, Skill] = {}
+        #: Other ways to perform an action (``register(..., variant="two-handed")``), in
+        #: registration order: the executive tries them when the main skill keeps failing.
+        self._variants: dict[str, dict[str, Skill]] = {}
         #: Builds a state for actions without a registered skill (e.g. symbolic skills).
         self.fallback = fallback
 
     def register(
-        self, action: str, *, outcome_map: Mapping[str, str] | None = None
+        self,
+        action: str,
+        *,
+        outcome_map: Mapping[str, str] | None = None,
+        variant: str | None = None,
     ) -> Callable[[SkillFactory], SkillFactory]:
-        """Decorator: ``@skills.register("pick")`` on a factory ``f(*args) -> State``."""
+        """Decorator: ``@skills.register("pick")`` on a factory ``f(*args) -> State``.
+
+        ``variant="..."`` registers another way to perform the action (a different
+        grasp, a slower approach); the executive switches to it when the main skill
+        fails while the plan is still valid."""
         name = action.lower()
 
         def decorate(factory: SkillFactory) -> SkillFactory:
+            if variant:
+                known = self._variants.setdefault(name, {})
+                if variant in known:
+                    raise SkillError(
+                        f"a variant {variant!r} of the skill for {name!r} is already registered"
+                    )
+                if not callable(factory):
+                    raise SkillError(
+                        f"the skill variant {name!r}/{variant!r} must be callable, got {factory!r}"
+                    )
+                known[variant] = Skill(name, factory, dict(outcome_map or {}), variant)
+                return factory
             if name in self._skills:
                 raise SkillError(
                     f"a skill for action {name!r} is already registered "
@@ -131,13 +156,28 @@ class SkillRegistry:
     def get(self, action: str) -> Skill | None:
         return self._skills.get(action.lower())
 
+    def variants(self, action: str) -> tuple[str, ...]:
+        """Names of the variants registered for ``action``, in registration order."""
+        return tuple(self._variants.get(action.lower(), ()))
+
     @property
     def actions(self) -> list[str]:
         return sorted(self._skills)
 
-    def create(self, step: PlanStep) -> tuple[smach.State, Skill | None]:
-        """Build the state for one plan step (and the skill it came from, if any)."""
-        skill = self._skills.get(step.action)
+    def create(
+        self, step: PlanStep, variant: str | None = None
+    ) -> tuple[smach.State, Skill | None]:
+        """Build the state for one plan step (and the skill it came from, if any);
+        ``variant`` picks one of the action's :meth:`variants`."""
+        if variant:
+            skill = self._variants.get(step.action, {}).get(variant)
+            if skill is None:
+                raise SkillError(
+                    f"no variant {variant!r} of the skill for {step.action!r}; variants: "
+                    f"{', '.join(self.variants(step.action)) or 'none'}"
+                )
+        else:
+            skill = self._skills.get(step.action)
         if skill is None:
             if self.fallback is None:
                 raise SkillError(
@@ -196,4 +236,18 @@ class SkillRegistry:
                 problems.append(f"skill {name!r}: {exc}")
                 continue
             problems.extend(f"skill {name!r}: {p}" for p in skill.outcome_problems(state))
+            for variant in self.variants(name):
+                label = f"skill {name!r} variant {variant!r}"
+                try:
+                    state, other = self.create(PlanStep(name, tuple(example)), variant)
+                except SkillError as exc:
+                    problems.append(f"{label}: {exc}")
+                    continue
+                assert other is not None
+                problems.extend(f"{label}: {p}" for p in other.outcome_problems(state))
+        for name in sorted(set(self._variants) - set(task.actions)):
+            problems.append(
+                f"skill variants of {name!r}: the domain has no action {name!r}; actions: "
+                f"{', '.join(sorted(task.actions))}"
+            )
         return problems

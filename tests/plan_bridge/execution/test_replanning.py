@@ -423,3 +423,67 @@ def test_policies_refuse_bad_budgets_and_unknown_configurations() -> None:
         ReplanPolicy(replan_timeout=0)
     with pytest.raises(ValueError, match="unknown configuration"):
         ReplanPolicy(replan_portfolio=("fastest",))
+
+
+@pytest.mark.timeout(120)
+def test_run_json_reports_planner_calls_replans_repairs_holds_and_reuses(
+    bench: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import json
+
+    from plan_bridge.cli import main
+
+    folder = bench / "blocks"
+    argv = ["run", str(folder / "domain.pddl"), "--problem", str(folder / "probBLOCKS-8-0.pddl")]
+    assert main([*argv, "--fail-rate", "0.3", "--seed", "3", "--json", "--quiet"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    for key in ("planner_calls", "replans", "repairs", "retries", "holds", "plans_reused"):
+        assert isinstance(data[key], int), key
+    assert data["planner_calls"] >= 1 and data["retries"] >= 1
+    assert 1 <= sum(data["planners_won"].values()) <= data["planner_calls"]
+
+
+class _Pick(smach.State):
+    """A pick skill that performs the action in the world, or fails if ``broken``."""
+
+    def __init__(self, world: SimulatedWorld, args: tuple[str, ...], broken: bool) -> None:
+        super().__init__(
+            outcomes=["succeeded", "aborted", "preempted"], output_keys=["observations"]
+        )
+        self.world, self.args, self.broken = world, args, broken
+
+    def execute(self, ud: smach.UserData) -> str:
+        if self.broken:
+            ud.observations = []
+            return "aborted"
+        ok, ud.observations = self.world.perform(PlanStep("pick", self.args))
+        return "succeeded" if ok else "aborted"
+
+
+@pytest.mark.timeout(60)
+def test_a_skill_that_keeps_failing_is_replaced_by_its_variant_without_planning() -> None:
+    task = _rooms()
+    world = SimulatedWorld(task)
+    skills = symbolic_skills(world)
+    skills.add("pick", lambda *args: _Pick(world, args, broken=True))
+    skills.register("pick", variant="careful")(lambda *args: _Pick(world, args, broken=False))
+    assert skills.variants("pick") == ("careful",)
+    assert skills.check(task) == []
+    executive = Executive(task, skills, FirstPlanOnly())
+    assert executive.execute() == "succeeded"
+    report = executive.report
+    assert report.retries == 2 and report.variants_tried == 1
+    assert report.planner_calls == 1 and report.replans == 0
+    variant = next(d for d in report.decisions if d["decision"] == "variant")
+    assert "'careful'" in variant["reason"] and variant["step"] == "(pick robot1 cup kitchen)"
+
+
+def test_an_unknown_skill_variant_is_named_with_the_registered_ones() -> None:
+    from plan_bridge.skills.registry import SkillError, SkillRegistry
+
+    skills = SkillRegistry()
+    skills.register("pick", variant="careful")(lambda *args: smach.State(["succeeded"]))
+    with pytest.raises(SkillError, match=r"no variant 'quick'.*variants: careful"):
+        skills.create(PlanStep("pick", ("robot1", "cup", "kitchen")), "quick")
+    with pytest.raises(SkillError, match="already registered"):
+        skills.register("pick", variant="careful")(lambda *args: smach.State(["succeeded"]))
