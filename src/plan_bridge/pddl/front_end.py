@@ -160,6 +160,7 @@ def _prepare_for_up(front: FrontEnd) -> None:
         problem_edits += _type_renames(problem.tree, renames, problem.sections)
     for action in domain.actions:
         domain_edits += _duration_substitution(action.parts, domain.source.text)
+    domain_edits += _declare_object_type(domain, problem)
     front.domain_up = rewrite(
         domain.source.text,
         domain.tree,
@@ -176,6 +177,25 @@ def _prepare_for_up(front: FrontEnd) -> None:
         problem_edits,
         added,
     )
+
+
+def _declare_object_type(domain: DomainModel, problem: ProblemModel) -> list[Edit]:
+    """UP 1.3 decides from the domain alone whether the type ``object`` exists: a
+    problem object typed ``object`` (or untyped) in a typed domain is then a
+    ``KeyError``. Declaring ``object`` in ``(:types ...)`` makes it exist."""
+    types = next((form for head, form in domain.sections if head == ":types"), None)
+    if types is None:
+        return []
+    items = types.items
+    for index in range(1, len(items)):
+        item, before = items[index], items[index - 1]
+        after_dash = isinstance(before, Atom) and before.text == "-"
+        if isinstance(item, Atom) and item.text == "object" and not after_dash:
+            return []  # declared as a type name already
+    entries = [*problem.objects.values(), *domain.constants.values()]
+    if not any(entry.type == "object" for entry in entries):
+        return []
+    return [Edit(types.end - 1, types.end - 1, " object")]
 
 
 def _type_renames(

@@ -273,12 +273,17 @@ def decode_source(data: bytes, path: str, kind: str) -> SourceText:
     nul = data.find(b"\x00")
     if nul >= 0:
         line = data.count(b"\n", 0, nul) + 1
-        column = nul - (data.rfind(b"\n", 0, nul) + 1) + 1
+        start = data.rfind(b"\n", 0, nul) + 1
+        column = nul - start + 1
+        end = data.find(b"\n", nul)
+        row = data[start : end if end >= 0 else len(data)][:160]
+        shown = row.decode("ascii", "replace").replace("\x00", "?")
         raise PddlError(
             f"binary data (a NUL byte) in the {kind} file: this is not a PDDL text file",
             path=path,
             line=line,
             column=column,
+            excerpt=f"{shown}\n{' ' * (column - 1)}^" if column <= 160 else "",
         )
     try:
         text = data.decode("utf-8-sig")
@@ -344,7 +349,24 @@ def _check_parentheses(source: SourceText, max_depth: int) -> None:
                 )
             open_offsets.pop()
             if not open_offsets and index + 1 < len(tokens):
-                line, column = source.line_col(tokens[index + 1].offset)
+                following = tokens[index + 1]
+                if (
+                    following.text == "("
+                    and index + 2 < len(tokens)
+                    and tokens[index + 2].text.startswith(":")
+                    # Indented like a section inside (define ...): more likely one ')'
+                    # too many before it, reported at that ')' below.
+                    and source.line_col(following.offset)[1] == 1
+                ):
+                    line, column = source.line_col(token.offset)
+                    raise source.error(
+                        f"section ({tokens[index + 2].text} ...) after the end of the "
+                        f"(define ...) form, which the ')' at {line}:{column} closes",
+                        following.offset,
+                        hint="is there one ')' too many before it? Sections belong inside "
+                        "(define ...)",
+                    )
+                line, column = source.line_col(following.offset)
                 raise source.error(
                     "unbalanced parentheses: this ')' closes the (define ...) form, but more "
                     f"text follows at {line}:{column}",
@@ -352,6 +374,16 @@ def _check_parentheses(source: SourceText, max_depth: int) -> None:
                     hint="is this an extra ')'? A PDDL file holds exactly one (define ...) form",
                 )
     if open_offsets:
+        suspect = _unclosed_by_indentation(source)
+        if suspect is not None:
+            unclosed, inside = suspect
+            line, column = source.line_col(inside)
+            raise source.error(
+                "unbalanced parentheses: this '(' is never closed (the '(' at "
+                f"{line}:{column}, indented like it, is still inside it)",
+                unclosed,
+                hint="is a ')' missing at the end of this form?",
+            )
         innermost = open_offsets[-1]
         line, column = source.line_col(open_offsets[0])
         raise source.error(
@@ -361,6 +393,26 @@ def _check_parentheses(source: SourceText, max_depth: int) -> None:
             innermost,
             hint="is the file truncated, or is a ')' missing?",
         )
+
+
+def _unclosed_by_indentation(source: SourceText) -> tuple[int, int] | None:
+    """When a ')' is missing, the form that lacks it is usually the one a later line,
+    indented no deeper, still sits inside: (offset of its '(', offset of that line's '(')."""
+    text = source.text
+    stack: list[tuple[int, int, bool]] = []  # offset, column, first on its line
+    for token in source.tokens:
+        if token.text == "(":
+            line_start = text.rfind("\n", 0, token.offset) + 1
+            first = not text[line_start : token.offset].strip()
+            column = token.offset - line_start
+            if first:
+                for offset, open_column, open_first in stack[1:]:
+                    if open_first and open_column >= column:
+                        return offset, token.offset
+            stack.append((token.offset, column, first))
+        elif token.text == ")" and stack:
+            stack.pop()
+    return None
 
 
 def _check_header(source: SourceText) -> None:

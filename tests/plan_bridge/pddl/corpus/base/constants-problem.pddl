@@ -1,0 +1,13 @@
+(define (problem deliver-one)
+  (:domain courier)
+  (:objects
+    van - robot
+    shop - place
+    box - parcel)
+  (:init
+    (at van depot)
+    (lies box depot)
+    (empty van)
+    (link depot shop)
+    (link shop depot))
+  (:goal (and (lies box shop))))

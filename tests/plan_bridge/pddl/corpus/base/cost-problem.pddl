@@ -1,0 +1,15 @@
+(define (problem deliver-one)
+  (:domain courier)
+  (:objects
+    van - robot
+    depot shop - place
+    box - parcel)
+  (:init
+    (at van depot)
+    (lies box depot)
+    (empty van)
+    (link depot shop)
+    (link shop depot)
+    (= (total-cost) 0))
+  (:goal (and (lies box shop)))
+  (:metric minimize (total-cost)))

@@ -1,0 +1,5 @@
+;; verdict: error
+;; message: empty
+;; where: domain
+;; line: none
+; nothing but a comment

@@ -1,0 +1,18 @@
+;; verdict: error
+;; message: duplicate section (:init ...)
+;; where: problem
+;; line: 17
+(define (problem deliver-one)
+  (:domain courier)
+  (:objects
+    van - robot
+    depot shop - place
+    box - parcel)
+  (:init
+    (at van depot)
+    (lies box depot)
+    (empty van)
+    (link depot shop)
+    (link shop depot))
+  (:init (empty van))
+  (:goal (and (lies box shop))))

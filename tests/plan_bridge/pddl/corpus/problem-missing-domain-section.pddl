@@ -1,0 +1,16 @@
+;; verdict: error
+;; message: no (:domain NAME) section
+;; where: problem
+;; line: 5
+(define (problem deliver-one)
+  (:objects
+    van - robot
+    depot shop - place
+    box - parcel)
+  (:init
+    (at van depot)
+    (lies box depot)
+    (empty van)
+    (link depot shop)
+    (link shop depot))
+  (:goal (and (lies box shop))))

@@ -1,0 +1,15 @@
+;; verdict: valid
+;; plan: 3
+(DEFINE (PROBLEM DELIVER-ONE)
+  (:DOMAIN COURIER)
+  (:OBJECTS
+    VAN - ROBOT
+    DEPOT SHOP - PLACE
+    BOX - PARCEL)
+  (:INIT
+    (AT VAN DEPOT)
+    (LIES BOX DEPOT)
+    (EMPTY VAN)
+    (LINK DEPOT SHOP)
+    (LINK SHOP DEPOT))
+  (:GOAL (AND (LIES BOX SHOP))))

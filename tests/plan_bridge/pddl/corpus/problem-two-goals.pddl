@@ -1,0 +1,17 @@
+;; verdict: error
+;; message: exactly one formula
+;; where: problem
+;; line: 17
+(define (problem deliver-one)
+  (:domain courier)
+  (:objects
+    van - robot
+    depot shop - place
+    box - parcel)
+  (:init
+    (at van depot)
+    (lies box depot)
+    (empty van)
+    (link depot shop)
+    (link shop depot))
+  (:goal (lies box shop) (at van shop)))

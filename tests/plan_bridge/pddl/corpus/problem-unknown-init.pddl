@@ -1,0 +1,17 @@
+;; verdict: error
+;; message: unknown
+;; where: problem
+;; line: 15
+(define (problem deliver-one)
+  (:domain courier)
+  (:objects
+    van - robot
+    depot shop - place
+    box - parcel)
+  (:init
+    (at van depot)
+    (lies box depot)
+    (empty van)
+    (unknown (link depot shop))
+    (link shop depot))
+  (:goal (and (lies box shop))))
