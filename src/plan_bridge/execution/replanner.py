@@ -11,6 +11,7 @@ a preempt request is answered at once (and kills the planner process).
 
 from __future__ import annotations
 
+import dataclasses
 import threading
 from collections.abc import Callable, Sequence
 
@@ -60,6 +61,9 @@ class Replanner:
         #: Plans that replaced the plan in force, after the first one.
         self.budgeted_calls = 0
         self._replan_planner: Planner | None = None
+        # Replans of this execution that gave no plan, by (state, goal): asking again
+        # from the same state would only wait for the same time-out.
+        self._no_plan: dict[tuple[frozenset[Fact], frozenset[Fact] | None], PlanResult] = {}
 
     @property
     def replan_planner(self) -> Planner:
@@ -81,6 +85,7 @@ class Replanner:
         """Begin an execution that reports into ``report``."""
         self.report = report
         self.budgeted_calls = 0
+        self._no_plan = {}
 
     def plan(
         self,
@@ -112,6 +117,17 @@ class Replanner:
                     self.budgeted_calls += 1
                 self.on_plan(f"{reason} (plan reused: same state and goal)", reused)
                 return reused
+        known = self._no_plan.get((facts, goal)) if replan else None
+        if known is not None:
+            if final:
+                self.budgeted_calls += 1
+            result = dataclasses.replace(
+                known,
+                planning_time_s=0.0,
+                explanation=f"{known.explanation} (an earlier replan from this state)",
+            )
+            self.on_plan(f"{reason} (no plan from this state before)", result)
+            return result
         remaining = policy.planning_time_budget - report.planning_time_s
         if remaining <= 0:
             raise MissionEnded(
@@ -127,6 +143,8 @@ class Replanner:
         if final:
             self.budgeted_calls += 1
         report.planning_time_s += result.planning_time_s
+        if replan and not result.solved and not self.preempt.is_set():
+            self._no_plan[(facts, goal)] = result
         if result.solved:
             report.planners_won[result.planner] = report.planners_won.get(result.planner, 0) + 1
             if policy.reuse_plans:

@@ -487,3 +487,17 @@ def test_an_unknown_skill_variant_is_named_with_the_registered_ones() -> None:
         skills.create(PlanStep("pick", ("robot1", "cup", "kitchen")), "quick")
     with pytest.raises(SkillError, match="already registered"):
         skills.register("pick", variant="careful")(lambda *args: smach.State(["succeeded"]))
+
+
+@pytest.mark.timeout(60)
+def test_a_state_the_planner_failed_from_is_not_planned_from_again() -> None:
+    task = _rooms()
+    world = SimulatedWorld(task)
+    _failing(world, "pick", 6)  # two rounds of retries, replan and hold, then success
+    planner = FirstPlanOnly()
+    executive = Executive(task, symbolic_skills(world), planner)
+    assert executive.execute() == "succeeded"
+    report = executive.report
+    assert report.replans == 2 and report.holds == 2
+    assert report.planner_calls == 2  # the second replan knew the answer
+    assert len(planner.timeouts) == 2
