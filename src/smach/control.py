@@ -22,8 +22,10 @@ Semantics (docs/control.md has the guarantees):
 
 The containers call two hooks, :meth:`Controller.enter` before a child starts and
 :meth:`Controller.leave` after it returns, only when a controller is attached to
-their tree (``EventBus.control``), so an uncontrolled tree pays one attribute load
-per transition.
+their tree (``EventBus.control``). A controller also attaches a no-op capture
+listener, so a controlled tree is an observed one: the ``StateMachine`` loop looks
+for a controller only on the steps somebody observes, and an unobserved machine
+pays one test of a local variable per transition for control.
 
 Locking: one re-entrant lock guards the controller's state; it is held while a
 state's ``request_preempt`` runs (so that a forced outcome is registered and the
@@ -44,6 +46,7 @@ from typing import Any, Literal
 
 from smach.container import Container
 from smach.exceptions import SmachError
+from smach.introspection.events import CaptureListener
 from smach.state import State
 
 __all__ = [
@@ -155,6 +158,10 @@ class ControlRecord:
 Observer = Callable[[ControlRecord], object]
 
 
+def _ignore(capture: object) -> None:
+    """The controller's listener: it only makes the tree observed (see Controller)."""
+
+
 def controller_of(state: State) -> Controller | None:
     """The controller attached to the tree ``state`` belongs to, if any."""
     return state._bus.control
@@ -212,7 +219,12 @@ class Controller:
         self._closed = False
         self._observers: tuple[Observer, ...] = ()
         self.history: deque[ControlRecord] = deque(maxlen=HISTORY)
+        # A controlled tree is an observed tree: the StateMachine loop looks for the
+        # controller only on steps somebody observes, so an unobserved machine pays
+        # nothing for control. This capture listener ignores what it gets.
+        self._marker = CaptureListener(_ignore, _ignore)
         bus.control = self
+        bus.add(self._marker)
 
     # -- life cycle ------------------------------------------------------------------------
     def close(self) -> None:
@@ -223,8 +235,10 @@ class Controller:
             self._breakpoint = None
             self._steps = 0
             self._cond.notify_all()
-        if self.root._bus.control is self:
-            self.root._bus.control = None
+        bus = self.root._bus
+        if bus.control is self:
+            bus.control = None
+        bus.remove(self._marker)
 
     def __enter__(self) -> Controller:
         return self

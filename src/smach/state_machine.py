@@ -15,7 +15,7 @@ from __future__ import annotations
 import threading
 import time
 from collections.abc import Iterable, Mapping, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import smach
 from smach.container import Container, construction_method
@@ -36,6 +36,9 @@ from smach.state import State
 from smach.user_data import Remapper, UserData
 from smach.util import is_shutdown as _never
 from smach.util import key_list
+
+if TYPE_CHECKING:
+    from smach.control import Controller
 
 __all__ = ["StateMachine"]
 
@@ -272,6 +275,7 @@ class StateMachine(Container):
         # are wanted (decided once per top-level run).
         thread = self._thread
         log = self._log_info
+        control: Controller | None = None
         self._preempted_state = None
         try:
             if smach.is_shutdown is not _never and smach.is_shutdown():
@@ -286,14 +290,16 @@ class StateMachine(Container):
                     self._handle_preempt(slot.state)
                 if slot.constants:
                     self._userdata._data.update(slot.constants)
-                control = bus.control  # runtime control (smach.control): None unless attached
-                if control is not None:
-                    if held is not None:  # the page/journal see the transition while held
-                        self._release((held, held_move))
-                        held = None
-                    control.enter(self, slot.path, slot.state)
                 observed = bus.listeners or self._local
                 if observed:
+                    # Runtime control (smach.control): a controller is one of the tree's
+                    # listeners, so an unobserved step never looks for it.
+                    control = bus.control
+                    if control is not None:
+                        if held is not None:  # the page/journal see the transition while held
+                            self._release((held, held_move))
+                            held = None
+                        control.enter(self, slot.path, slot.state)
                     if thread is None:
                         thread = threading.current_thread().name
                     if bus.event_listeners or self._local:
@@ -321,10 +327,10 @@ class StateMachine(Container):
                     # Typed str: anything else fails the lookup below and is reported.
                     outcome: str = slot.state.execute(slot.remapper)  # type: ignore[assignment]
                 except Exception as exc:
-                    if control is not None:
+                    if observed and control is not None:
                         control.leave(slot.path, slot.state, None)
                     raise self._child_error(label, slot.state, exc) from exc
-                if control is not None:  # a forced outcome replaces the returned one
+                if observed and control is not None:  # a forced outcome replaces the returned one
                     outcome = control.leave(slot.path, slot.state, outcome)  # type: ignore[assignment]
                 try:
                     target = slot.next[outcome]

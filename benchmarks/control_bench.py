@@ -1,0 +1,140 @@
+"""Cost of the runtime-control hook on the transition path when no control is in use.
+
+Usage::
+
+    .venv/bin/python benchmarks/control_bench.py                  # about 30 s
+    .venv/bin/python benchmarks/control_bench.py --quick          # a few seconds
+    .venv/bin/python benchmarks/control_bench.py --before REV     # compare with REV
+
+The hook is one ``bus.control`` load per transition (smach/control.py). To measure
+it, the ``StateMachine`` of a commit *before* the hook (``--before``, default: the
+parent of the commit that added it) is loaded from git into this process next to
+the current one, and the same 1000-state chain of trivial states (the ``chain``
+scenario of core_bench.py) is built with each. Trials alternate between the two
+(round-robin, gc disabled while timing) so that drift of a shared machine hits
+both alike; the table gives the median us/transition of each and their ratio. A
+third column runs the current machine with a controller attached and running (no
+pause, no breakpoint), for information: that is the cost of control in use.
+"""
+
+from __future__ import annotations
+
+import argparse
+import gc
+import importlib.util
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+import smach
+from smach.control import Controller
+
+ROOT = Path(__file__).resolve().parents[1]
+HOOK_COMMIT = "82a1381"  # "control: container hooks ..." (issue 18)
+
+
+class Trivial(smach.State):
+    def __init__(self) -> None:
+        super().__init__(outcomes=["done"])
+
+    def execute(self, ud: Any) -> str:
+        return "done"
+
+
+def load_state_machine(rev: str | None) -> type[smach.StateMachine]:
+    """``StateMachine`` as it was at ``rev`` (None: the working tree's), loaded anew.
+
+    Both sides are loaded the same way (a fresh module from a temporary file), so
+    neither gets an advantage from where its code objects live.
+    """
+    if rev is None:
+        text = (ROOT / "src" / "smach" / "state_machine.py").read_text(encoding="utf-8")
+    else:
+        text = subprocess.run(
+            ["git", "show", f"{rev}:src/smach/state_machine.py"],
+            cwd=ROOT,
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout
+    with tempfile.NamedTemporaryFile("w", suffix=".py", delete=False) as handle:
+        handle.write(text)
+    spec = importlib.util.spec_from_file_location("smach_state_machine_before", handle.name)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    Path(handle.name).unlink()
+    cls: type[smach.StateMachine] = module.StateMachine
+    if rev is not None and "bus.control" in text:
+        raise SystemExit(f"{rev} already has the control hook; pass an older --before")
+    return cls
+
+
+def chain(cls: type[smach.StateMachine], n: int) -> smach.StateMachine:
+    sm = cls(outcomes=["end"])
+    for i in range(n):
+        sm.add(f"S{i}", Trivial(), transitions={"done": f"S{i + 1}" if i + 1 < n else "end"})
+    sm.execute()  # compile once
+    return sm
+
+
+def trial(sm: smach.StateMachine, n: int, min_s: float) -> float:
+    """us per transition over enough runs to last ``min_s``."""
+    runs = 0
+    gc.disable()
+    try:
+        started = time.perf_counter()
+        while True:
+            sm.execute()
+            runs += 1
+            elapsed = time.perf_counter() - started
+            if elapsed >= min_s:
+                break
+    finally:
+        gc.enable()
+    return elapsed / (runs * n) * 1e6
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="fewer, shorter trials")
+    parser.add_argument("--before", default=f"{HOOK_COMMIT}^", help="a commit without the hook")
+    parser.add_argument("--states", type=int, default=1000)
+    args = parser.parse_args()
+    trials, min_s = (7, 0.05) if args.quick else (31, 0.2)
+    n = args.states
+    before = chain(load_state_machine(args.before), n)
+    now = chain(load_state_machine(None), n)
+    controlled = chain(load_state_machine(None), n)
+    ctl = Controller(controlled)
+    samples: dict[str, list[float]] = {"before": [], "now": [], "controlled": []}
+    machines = {"before": before, "now": now, "controlled": controlled}
+    order = list(machines)
+    for t in range(trials):
+        for name in order[t % 3 :] + order[: t % 3]:  # rotate who goes first
+            samples[name].append(trial(machines[name], n, min_s))
+    ctl.close()
+    med = {name: statistics.median(values) for name, values in samples.items()}
+    ratios = [b / a for a, b in zip(samples["before"], samples["now"], strict=True)]
+    print(f"chain of {n} trivial states, {trials} interleaved trials of >= {min_s} s each")
+    print(f"python {sys.version.split()[0]}, before = {args.before}")
+    print(f"{'machine':<34}{'us/transition (median)':>24}")
+    print(f"{'before the hook':<34}{med['before']:>24.4f}")
+    print(f"{'with the hook, no control':<34}{med['now']:>24.4f}")
+    print(f"{'with a controller attached':<34}{med['controlled']:>24.4f}")
+    ratio = statistics.median(ratios)
+    print(
+        f"hook cost, no control: {100 * (med['now'] / med['before'] - 1):+.1f}% (ratio of medians)"
+    )
+    print(f"hook cost, no control: {100 * (ratio - 1):+.1f}% (median of per-trial ratios)")
+    print(
+        f"control in use (attached, running): {100 * (med['controlled'] / med['before'] - 1):+.1f}%"
+    )
+
+
+if __name__ == "__main__":
+    main()
