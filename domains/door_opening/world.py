@@ -45,6 +45,10 @@ Joint = tuple[str, str, str | None]
 class DoorWorld(SimulatedWorld):
     """Rooms joined by doors and passages; some doors are really locked."""
 
+    # Declared once: snapshot() saves every `state` attribute (see SimulatedWorld).
+    state = ("locked",)
+    constant = ("doors", "passages", "start", "goal_rooms")
+
     fault_scale = FAULT_SCALE
     variants = VARIANTS
 

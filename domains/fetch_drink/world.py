@@ -59,6 +59,10 @@ CONGESTION_WAIT = 5.0  # s a person standing in a corridor takes to move on
 class FetchDrinkWorld(SimulatedWorld):
     """A home with a fridge: places joined by corridors, drinks on shelves."""
 
+    # Declared once: snapshot() saves every `state` attribute (see SimulatedWorld).
+    state = ("blocked",)
+    constant = ("corridors",)
+
     fault_scale = FAULT_SCALE
     variants = VARIANTS
 

@@ -65,6 +65,11 @@ class Transit:
 class RechargeWorld(SimulatedWorld):
     """Rooms joined by corridors, items to carry, a charger and a draining battery."""
 
+    # Declared once: snapshot() saves every `state` attribute (see SimulatedWorld).
+    state = ("battery", "recharges", "_transit")
+    constant = ("corridors", "chargers")
+    wiring = ("_low_listeners",)
+
     fault_scale = FAULT_SCALE
 
     def __init__(self, task: PlanningTask, *, seed: int | None = 0, fail_rate: float = 0.0) -> None:

@@ -75,6 +75,10 @@ class CartRun:
 class TableWorld(SimulatedWorld):
     """The true state of the table-clearing mission, with seeded faults."""
 
+    # Declared once: snapshot() saves every `state` attribute (see SimulatedWorld).
+    state = ("_hidden", "_blocked", "_judged")
+    constant = ("robots", "carts", "table_zones")
+
     fault_scale = FAULT_SCALE
 
     def __init__(self, task: PlanningTask, *, seed: int | None = 0, fail_rate: float = 0.0) -> None:

@@ -58,6 +58,10 @@ BLOCKABLE = ("office", "lab", "hall-west", "hall-east", "corridor")
 class DeliveryWorld(SimulatedWorld):
     """The true state of the two-robot delivery mission, with seeded faults."""
 
+    # Declared once: snapshot() saves every `state` attribute (see SimulatedWorld).
+    state = ("_clock", "_found_blocked", "_rngs", "blocked_door")
+    constant = ("robots",)
+
     fault_scale = FAULT_SCALE
 
     def __init__(self, task: PlanningTask, *, seed: int | None = 0, fail_rate: float = 0.0) -> None:

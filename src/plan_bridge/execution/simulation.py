@@ -9,7 +9,6 @@ This makes any PDDL domain executable without writing skills.
 
 from __future__ import annotations
 
-import dataclasses
 import random
 import threading
 from collections.abc import Iterable, Mapping
@@ -18,6 +17,7 @@ from typing import Any, ClassVar
 
 import smach
 from plan_bridge.execution.semantics import ActionModel
+from plan_bridge.execution.snapshots import SnapshotError, decode, encode
 from plan_bridge.pddl.task import Fact, PlanningTask
 from plan_bridge.planning.planner import PlanStep
 from plan_bridge.skills.registry import SkillRegistry
@@ -42,7 +42,23 @@ class SimulatedWorld:
     (under :attr:`_lock`), advance :attr:`sim_time` (simulated robot seconds) as the
     robot acts, draw their faults with :meth:`chance` and record every fault they
     inject with :meth:`inject`, so that runs can be compared (``plan-bridge study``).
+
+    Every attribute of a world is declared once, in one of three class attributes
+    (each class lists its own; a subclass adds to its bases'):
+
+    * :attr:`state`: what changes while the world runs. :meth:`snapshot` saves all of
+      it and :meth:`restore` puts all of it back, so a resumed run continues the
+      same world;
+    * :attr:`constant`: what is fixed when the world is made (read from the task);
+    * :attr:`wiring`: live connections that are not the world (locks, subscribers).
+
+    :meth:`snapshot` refuses a world with an attribute in none of them, naming it:
+    a new attribute cannot be left out of checkpoints by mistake.
     """
+
+    state: ClassVar[tuple[str, ...]] = ("_facts", "sim_time", "actions_run", "faults", "rng")
+    constant: ClassVar[tuple[str, ...]] = ("task", "model", "fail_rate", "variant")
+    wiring: ClassVar[tuple[str, ...]] = ("_lock",)
 
     #: Simulated seconds one symbolic action takes.
     action_duration = 1.0
@@ -100,27 +116,48 @@ class SimulatedWorld:
         self.faults.append(fault)
         return fault
 
+    @classmethod
+    def declared(cls, kind: str) -> tuple[str, ...]:
+        """The attributes of ``kind`` (state, constant, wiring) of this class and its bases."""
+        names: dict[str, None] = {}
+        for klass in reversed(cls.__mro__):
+            names.update(dict.fromkeys(klass.__dict__.get(kind, ())))
+        return tuple(names)
+
+    def undeclared(self) -> list[str]:
+        """Attributes of this world that no declaration names (they would not be saved)."""
+        known = {*self.declared("state"), *self.declared("constant"), *self.declared("wiring")}
+        return sorted(name for name in vars(self) if name not in known)
+
     def snapshot(self) -> dict[str, Any]:
-        """The world's state as JSON data (for checkpoints; subclasses add their own)."""
+        """Every :attr:`state` attribute as JSON data (for checkpoints).
+
+        Raises :class:`~plan_bridge.execution.snapshots.SnapshotError` if the world
+        has an attribute that no declaration names, or a value that cannot be saved.
+        """
+        missing = self.undeclared()
+        if missing:
+            raise SnapshotError(
+                f"{type(self).__name__}: attribute(s) {', '.join(missing)} declared nowhere; "
+                f"add each to the class's `state` (saved in checkpoints), `constant` (fixed "
+                f"when the world is made) or `wiring` (locks, subscribers)"
+            )
         with self._lock:
-            version, internal, gauss = self.rng.getstate()
-            return {
-                "facts": sorted(" ".join(f) for f in self._facts),
-                "sim_time": self.sim_time,
-                "actions_run": self.actions_run,
-                "faults": [dataclasses.asdict(f) for f in self.faults],
-                "rng": [version, list(internal), gauss],
-            }
+            return {name: encode(getattr(self, name), name) for name in self.declared("state")}
 
     def restore(self, data: dict[str, Any]) -> None:
-        """Put the world back into a :meth:`snapshot` state."""
+        """Put the world back into a :meth:`snapshot` state (all of it)."""
+        names = self.declared("state")
+        absent = [name for name in names if name not in data]
+        if absent:
+            raise SnapshotError(
+                f"not a snapshot of a {type(self).__name__}: {', '.join(absent)} missing "
+                f"(a checkpoint of another world, or of an older version)"
+            )
+        values = {name: decode(data[name], name) for name in names}
         with self._lock:
-            self._facts = {tuple(f.split()) for f in data["facts"]}
-            self.sim_time = float(data["sim_time"])
-            self.actions_run = int(data.get("actions_run", 0))
-            self.faults = [Fault(**f) for f in data.get("faults", [])]
-            version, internal, gauss = data["rng"]
-            self.rng.setstate((version, tuple(internal), gauss))
+            for name, value in values.items():
+                setattr(self, name, value)
 
     def goal_reached(self) -> bool:
         """Whether the task's goal holds in the true world."""
