@@ -26,10 +26,12 @@ def _configure_plan(parser: argparse.ArgumentParser) -> None:
     add_input_arguments(parser)
     parser.add_argument(
         "--planner",
-        default="fast-downward",
+        default="auto",
         metavar="NAME",
-        help="unified-planning engine: fast-downward (default), fast-downward-opt, "
-        "pyperplan, pyperplan-opt or any installed one-shot planner",
+        help="unified-planning engine: auto (default: Fast Downward for classical "
+        "problems, Kairos or TAMER for temporal and numeric ones, the next engine when "
+        "one fails), fast-downward, fast-downward-opt, pyperplan, kairos, tamer or any "
+        "installed one-shot planner",
     )
     parser.add_argument(
         "--timeout",
@@ -55,10 +57,10 @@ def _run_plan(args: argparse.Namespace) -> int:
         return fail(str(exc))
 
     from plan_bridge.pddl.task import load_task
-    from plan_bridge.planning.planner import PlanStatus, UPPlanner, get_planner
+    from plan_bridge.planning.planner import Planner, PlanStatus, get_planner
     from plan_bridge.planning.worker import default_pool
 
-    planners: list[UPPlanner] = []
+    planners: list[Planner] = []
     try:
         progress(f"loading {domain} and {problem}...")
         # A planner process parses the task while we parse it (prime); the planner
@@ -91,7 +93,11 @@ def _run_plan(args: argparse.Namespace) -> int:
         if result.solved:
             width = len(str(len(result.actions)))
             for number, step in enumerate(result.actions, start=1):
-                print(f"{number:>{width}}. {step}")
+                timing = (
+                    f"{step.start:>8.3f}: " if step.start is not None else ""
+                )  # temporal plans: start time, then [duration]
+                length = f" [{step.duration:g}]" if step.duration is not None else ""
+                print(f"{number:>{width}}. {timing}{step}{length}")
             print(
                 f"solved: {len(result.actions)} actions in {result.planning_time_s:.2f} s "
                 f"with {result.planner}"

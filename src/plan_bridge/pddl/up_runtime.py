@@ -93,6 +93,7 @@ def ensure_unified_planning() -> None:
 
             environment = unified_planning.shortcuts.get_environment()
             environment.credits_stream = None
+            _register_plugins()
             # Touch the factory so engine plug-ins (which also import ConfigSpace)
             # are loaded while the stand-in is in place.
             _ = environment.factory.engines
@@ -102,6 +103,26 @@ def ensure_unified_planning() -> None:
             ):
                 del sys.modules["ConfigSpace"]
         _ready = True
+
+
+def _register_plugins() -> None:
+    """Add engines that do not register themselves with UP's factory when imported.
+
+    up-kairos (a temporal and numeric planner) must be registered with
+    ``up_kairos.register()``; without it a user with a durative domain would have to
+    know that. A missing or broken plug-in is skipped: it is then simply not listed
+    among the installed planners.
+    """
+    import importlib.util
+
+    if importlib.util.find_spec("up_kairos") is None:
+        return
+    try:
+        import up_kairos  # type: ignore[import-not-found, import-untyped, unused-ignore]
+
+        up_kairos.register()
+    except Exception:  # an engine that fails to load is just not offered
+        return
 
 
 _lean_class: Any = None
@@ -129,8 +150,12 @@ def _lean_problem_class() -> Any:
 
         _plan_bridge_kind: Any = None
 
+        _plan_bridge_full_values = False
+
         @property
         def initial_values(self) -> dict[Any, Any]:
+            if self._plan_bridge_full_values:
+                return dict(Problem.initial_values.fget(self))
             values = dict(self._initial_value)
             defaults = self._fluent_set.fluents_defaults
             for fluent in self._fluent_set.fluents:
@@ -168,4 +193,23 @@ def lean_copy(problem: Any, *, kind: Any = None) -> Any:
     copy.__class__ = _lean_problem_class()
     if kind is not None:
         copy._plan_bridge_kind = kind
+    copy._plan_bridge_full_values = getattr(
+        problem, "_plan_bridge_full_values", False
+    ) or _needs_full_values(problem)
     return copy
+
+
+def _needs_full_values(problem: Any) -> bool:
+    """Whether engines need every ground atom's value (temporal and numeric ones do).
+
+    TAMER converts ``initial_values`` into its own state and fails on an atom it has
+    no value for (a false-by-default fact the lean view skips); its problems are
+    small enough that the full enumeration costs little. Classical problems (boolean
+    fluents, at most an action-cost function) keep the lean view.
+    """
+    from unified_planning.model import DurativeAction
+
+    if any(isinstance(action, DurativeAction) for action in problem.actions):
+        return True
+    numeric = [f for f in problem.fluents if not f.type.is_bool_type()]
+    return any(f.name != "total-cost" for f in numeric)

@@ -19,17 +19,20 @@ import dataclasses
 import enum
 import threading
 import time
-import warnings
 import weakref
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
-from typing import Any, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 from plan_bridge.errors import PlannerNotFoundError
 from plan_bridge.pddl.reachability import ReachabilityReport, relaxed_unreachable_goals
 from plan_bridge.pddl.task import Fact, FactLike, PlanningTask, format_fact
-from plan_bridge.pddl.up_runtime import ensure_unified_planning, lean_copy
-from plan_bridge.planning.worker import ProblemText, SolveReply, WorkerPool, default_pool
+from plan_bridge.pddl.up_runtime import ensure_unified_planning
+from plan_bridge.planning.problem_source import problem_source as _problem_source
+from plan_bridge.planning.worker import SolveReply, WorkerPool, default_pool
+
+if TYPE_CHECKING:
+    from plan_bridge.planning.engines import AutoPlanner
 
 __all__ = [
     "DEFAULT_PLANNER",
@@ -61,10 +64,17 @@ class PlanStatus(str, enum.Enum):
 
 @dataclass(frozen=True)
 class PlanStep:
-    """One ground action of a plan: ``PlanStep("pick", ("cup", "table"))``."""
+    """One ground action of a plan: ``PlanStep("pick", ("cup", "table"))``.
+
+    Steps of a temporal plan also carry their planned ``start`` and ``duration``
+    (plan time, seconds); they do not take part in equality, so a step is the same
+    action whenever it is planned.
+    """
 
     action: str
     arguments: tuple[str, ...] = ()
+    start: float | None = field(default=None, compare=False)
+    duration: float | None = field(default=None, compare=False)
 
     def __str__(self) -> str:
         return "(" + " ".join((self.action, *self.arguments)) + ")"
@@ -102,6 +112,18 @@ class PlanResult:
     def plan_strings(self) -> list[str]:
         return [str(step) for step in self.actions]
 
+    @property
+    def temporal(self) -> bool:
+        """Whether the plan is time-triggered (its steps have start times)."""
+        return any(step.start is not None for step in self.actions)
+
+    @property
+    def makespan(self) -> float | None:
+        """When the last action of a temporal plan ends (plan time); None otherwise."""
+        if not self.temporal:
+            return None
+        return max(((s.start or 0.0) + (s.duration or 0.0) for s in self.actions), default=0.0)
+
     def to_json(self) -> dict[str, Any]:
         """A JSON-serialisable summary (the shape of ``plan-bridge plan --json``)."""
         return {
@@ -114,6 +136,18 @@ class PlanResult:
             "unreachable_goals": [format_fact(goal) for goal in self.unreachable_goals],
             "warnings": list(self.warnings),
             "engine_status": self.engine_status,
+            **self._timing_json(),
+        }
+
+    def _timing_json(self) -> dict[str, Any]:
+        if not self.temporal:
+            return {}
+        return {
+            "actions": [
+                {"action": str(step), "start": step.start, "duration": step.duration}
+                for step in self.actions
+            ],
+            "makespan": self.makespan,
         }
 
 
@@ -166,10 +200,15 @@ def get_planner(
     pool: WorkerPool | None = None,
     params: Mapping[str, Any] | None = None,
     label: str | None = None,
-) -> UPPlanner:
+) -> UPPlanner | AutoPlanner:
     """The planner called ``name``; raises :class:`PlannerNotFoundError` listing the
     installed ones if there is none. ``params`` configure the engine, ``label`` names
-    that configuration (see :class:`UPPlanner`)."""
+    that configuration (see :class:`UPPlanner`). ``"auto"`` chooses the engine from
+    each problem's kind (:class:`~plan_bridge.planning.engines.AutoPlanner`)."""
+    if name == "auto":
+        from plan_bridge.planning.engines import AutoPlanner
+
+        return AutoPlanner(pool=pool)
     return UPPlanner(name, pool=pool, params=params, label=label)
 
 
@@ -238,6 +277,16 @@ class UPPlanner:
 
     def _alternatives(self, task: PlanningTask) -> str:
         supporting = [n for n in self.supporting_engines(task) if n != self._engine]
+        lacking = _lacking(DEFAULT_PLANNER, task)
+        if (
+            DEFAULT_PLANNER not in supporting
+            and self._engine != DEFAULT_PLANNER
+            and lacking
+            and all("COST" in f or f == "UNDEFINED_INITIAL_NUMERIC" for f in lacking)
+        ):
+            # UP declares Fast Downward unsuitable for action costs read from PDDL,
+            # yet it solves them (see the warnings of its results).
+            supporting.insert(0, DEFAULT_PLANNER)
         if supporting:
             return f"Installed planners that support it: {', '.join(supporting)}"
         others = []
@@ -255,17 +304,7 @@ class UPPlanner:
 
     def unsupported_features(self, task: PlanningTask) -> list[str]:
         """Features of ``task`` this engine does not declare support for."""
-        ensure_unified_planning()
-        from unified_planning.shortcuts import get_environment
-
-        engine = get_environment().factory.engine(self._engine)
-        kind = task.problem.kind
-        try:
-            if engine.supports(kind):
-                return []
-            return sorted(set(kind.features) - set(engine.supported_kind().features))
-        except Exception:  # meta engines need a concrete problem to answer
-            return []
+        return _lacking(self._engine, task)
 
     def solve(
         self,
@@ -275,8 +314,12 @@ class UPPlanner:
         initial_state: Iterable[FactLike] | None = None,
         goal: Iterable[FactLike] | None = None,
         cancel: threading.Event | None = None,
+        values: Mapping[Fact, float] | None = None,
     ) -> PlanResult:
         """Plan for ``task`` within ``timeout`` seconds of engine wall-clock time.
+
+        ``values`` (numeric atom -> number) replaces the initial values of those
+        numeric fluents (a replan from a belief that holds numbers).
 
         ``initial_state`` (true ground facts) replaces the task's initial state and
         ``goal`` (ground atoms) replaces its goal by their conjunction, for this solve.
@@ -335,6 +378,9 @@ class UPPlanner:
                 timeout,
                 init=None if facts is None else [source.pddl_atom(f) for f in sorted(facts)],
                 goal=None if goal_atoms is None else [source.pddl_atom(a) for a in goal_atoms],
+                values=None
+                if not values
+                else [[*source.pddl_atom(atom), float(v)] for atom, v in sorted(values.items())],
                 params=self.params,
                 cancel=cancel,
             )
@@ -369,16 +415,22 @@ class UPPlanner:
         missing: list[str],
     ) -> PlanResult:
         if reply.outcome == "result" and reply.status.startswith("SOLVED"):
+            timing = reply.timing or ((None, None),) * len(reply.plan)
             if writer is None:
-                steps = [PlanStep(action, args) for action, args in reply.plan]
+                steps = [
+                    PlanStep(action, args, start, duration)
+                    for (action, args), (start, duration) in zip(reply.plan, timing, strict=True)
+                ]
             else:
                 # PDDLWriter renames what is not a valid PDDL name: map back.
                 steps = [
                     PlanStep(
                         writer.get_item_named(action).name,
                         tuple(writer.get_item_named(arg).name for arg in args),
+                        start,
+                        duration,
                     )
-                    for action, args in reply.plan
+                    for (action, args), (start, duration) in zip(reply.plan, timing, strict=True)
                 ]
             return self._finish(
                 task,
@@ -523,48 +575,19 @@ class UPPlanner:
 _cache_lock = threading.Lock()
 
 
-@dataclasses.dataclass(frozen=True)
-class _ProblemSource:
-    """How a task travels to the workers: its PDDL text and the names used in it."""
+def _lacking(engine_name: str, task: PlanningTask) -> list[str]:
+    """Features of ``task`` the engine ``engine_name`` does not declare support for."""
+    ensure_unified_planning()
+    from unified_planning.shortcuts import get_environment
 
-    text: ProblemText
-    writer: Any = None
-    """UP's PDDLWriter, when the text was written from a problem built in code."""
-    problem: Any = None
-    """The problem the writer wrote (its items map to PDDL names)."""
-    notes: tuple[str, ...] = ()
-
-    def pddl_atom(self, fact: Fact) -> list[str]:
-        """``fact`` with the names the PDDL text uses."""
-        if self.writer is None:
-            return list(fact)
-        problem, name = self.problem, self.writer.get_pddl_name
-        return [name(problem.fluent(fact[0])), *(name(problem.object(a)) for a in fact[1:])]
-
-
-_written: weakref.WeakKeyDictionary[PlanningTask, _ProblemSource] = weakref.WeakKeyDictionary()
-
-
-def _problem_source(task: PlanningTask) -> _ProblemSource:
-    if task.domain_text is not None and task.problem_text is not None:
-        # Loaded from PDDL: the worker re-reads the very text we read, so names come
-        # back unchanged.
-        return _ProblemSource(ProblemText.of(task.domain_text, task.problem_text))
-    with _cache_lock:
-        cached = _written.get(task)
-    if cached is not None:
-        return cached
-    from unified_planning.io import PDDLWriter  # type: ignore[import-untyped]
-
-    problem = lean_copy(task.problem)
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        writer = PDDLWriter(problem)
-        text = ProblemText.of(writer.get_domain(), writer.get_problem())
-    source = _ProblemSource(text, writer, problem, tuple(str(w.message) for w in caught))
-    with _cache_lock:
-        _written[task] = source
-    return source
+    engine = get_environment().factory.engine(engine_name)
+    kind = task.problem.kind
+    try:
+        if engine.supports(kind):
+            return []
+        return sorted(set(kind.features) - set(engine.supported_kind().features))
+    except Exception:  # meta engines need a concrete problem to answer
+        return []
 
 
 def _first_line(text: str) -> str:

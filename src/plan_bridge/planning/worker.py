@@ -16,7 +16,7 @@ Why a plain subprocess speaking JSON lines, not ``multiprocessing``:
 
 Workers are kept warm in a :class:`WorkerPool`: unified-planning is imported once
 per worker (about 0.5 s), and a worker is only replaced after it was killed.
-Run as ``python -m plan_bridge.planning.worker`` it serves requests on stdin/stdout.
+The worker side (what runs in the process) is :mod:`plan_bridge.planning.service`.
 
 **Replans do not re-parse.** A worker keeps the last :data:`BASE_CACHE_SIZE` parsed
 problems, keyed by a hash of their PDDL text (a :class:`ProblemText`). A request
@@ -51,12 +51,12 @@ import time
 from collections import OrderedDict
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import IO, Any
+from typing import Any
 
 from plan_bridge.errors import WorkerError
 from plan_bridge.pddl.source import ProblemText
 
-__all__ = ["ProblemText", "SolveReply", "Worker", "WorkerPool", "default_pool", "serve"]
+__all__ = ["ProblemText", "SolveReply", "Worker", "WorkerPool", "default_pool"]
 
 STARTUP_TIMEOUT_S = 60.0
 _KILL_GRACE_S = 0.2
@@ -84,6 +84,9 @@ class SolveReply:
     """Time the worker spent parsing PDDL for this solve (0 when it reused a parse)."""
     reused: bool = False
     """True when the worker derived the problem from a base it had parsed before."""
+    timing: tuple[tuple[float, float | None], ...] = ()
+    """(start, duration) of each plan action in plan time (seconds), when the engine
+    returned a time-triggered plan; empty for sequential plans."""
 
 
 class Worker:
@@ -98,7 +101,7 @@ class Worker:
         bootstrap = (
             f"import sys; root = {package_root!r}\n"
             "if root not in sys.path: sys.path.insert(0, root)\n"
-            "from plan_bridge.planning.worker import _main; _main()"
+            "from plan_bridge.planning.service import main; main()"
         )
         self.process = subprocess.Popen(
             [sys.executable, "-c", bootstrap],
@@ -205,12 +208,14 @@ class Worker:
         *,
         init: Iterable[Sequence[str]] | None = None,
         goal: Iterable[Sequence[str]] | None = None,
+        values: Iterable[Sequence[Any]] | None = None,
         engine_timeout: bool = True,
         params: Mapping[str, Any] | None = None,
         cancel: threading.Event | None = None,
     ) -> SolveReply:
         """Solve ``base`` (with ``init`` as its true initial facts and ``goal`` as its
-        goal conjunction, when given); kill the worker if it does not answer within
+        goal conjunction, when given; ``values``: ``[fluent, *args, number]`` initial
+        values of numeric atoms); kill the worker if it does not answer within
         ``timeout``. ``params`` go to the engine (UP ``OneshotPlanner(params=...)``,
         e.g. a Fast Downward search configuration); setting ``cancel`` kills the
         worker and returns the outcome ``"cancelled"`` (a portfolio stops the
@@ -222,6 +227,7 @@ class Worker:
             "base": base.key,
             "init": None if init is None else [list(fact) for fact in init],
             "goal": None if goal is None else [list(atom) for atom in goal],
+            "values": None if values is None else [list(entry) for entry in values],
             # The engine's own limit is a courtesy (Fast Downward then stops cleanly
             # and reports TIMEOUT); the kill below is what makes the limit hard.
             "timeout": timeout if engine_timeout else None,
@@ -246,11 +252,15 @@ class Worker:
                     continue
                 break
             self._remember(base.key)
+            entries = reply.get("plan", [])
             return SolveReply(
                 outcome=str(reply["outcome"]),
                 status=str(reply.get("status", "")),
-                plan=tuple(
-                    (str(name), tuple(str(a) for a in args)) for name, args in reply.get("plan", [])
+                plan=tuple((str(entry[0]), tuple(str(a) for a in entry[1])) for entry in entries),
+                timing=tuple(
+                    (float(entry[2]), None if entry[3] is None else float(entry[3]))
+                    for entry in entries
+                    if len(entry) == 4
                 ),
                 message=str(reply.get("message", "")),
                 error_type=str(reply.get("error_type", "")),
@@ -510,197 +520,3 @@ def _forget_pool_after_fork() -> None:
 atexit.register(_close_default_pool)
 if hasattr(os, "register_at_fork"):
     os.register_at_fork(after_in_child=_forget_pool_after_fork)
-
-
-# -- worker side -------------------------------------------------------------------
-
-
-def serve(requests: IO[str], replies: IO[str]) -> None:
-    """Answer solve requests (one JSON object per line) until stdin closes."""
-    from plan_bridge.pddl.up_runtime import ensure_unified_planning
-
-    ensure_unified_planning()
-    from unified_planning.io import PDDLReader  # type: ignore[import-untyped]
-
-    # Build the grammar once: constructing a PDDLReader costs ~50 ms.
-    reader = PDDLReader()
-    home = os.getcwd()
-    replies.write(json.dumps({"ready": True, "pid": os.getpid()}) + "\n")
-    replies.flush()
-    for line in requests:
-        if not line.strip():
-            continue
-        request = json.loads(line)
-        if request.get("op") == "parse":
-            reply = _parse_request(reader, request)
-            reply["id"] = request["id"]
-            replies.write(json.dumps(reply) + "\n")
-            replies.flush()
-            continue
-        try:
-            os.chdir(request["workdir"])
-            reply = _solve_request(reader, request)
-        except Exception as exc:
-            reply = {"outcome": "error", "error_type": type(exc).__name__, "message": str(exc)}
-        finally:
-            os.chdir(home)
-        reply["id"] = request["id"]
-        replies.write(json.dumps(reply) + "\n")
-        replies.flush()
-
-
-class _Base:
-    """A parsed base problem and what deriving problems from it needs."""
-
-    def __init__(self, problem: Any) -> None:
-        from plan_bridge.pddl.up_runtime import lean_copy
-
-        self.problem = lean_copy(problem)
-        self.kind = self.problem.kind
-        # Fact -> fluent expression of the atoms true in the base's initial state.
-        self.true_atoms: dict[tuple[str, ...], Any] = {
-            _atom_of(fluent_exp): fluent_exp
-            for fluent_exp, value in self.problem.explicit_initial_values.items()
-            if fluent_exp.type.is_bool_type() and value.is_bool_constant() and value.is_true()
-        }
-        self.goal_atoms = _conjunctive_goal(self.problem.goals)
-
-    def derive(self, init: list[list[str]] | None, goal: list[list[str]] | None) -> Any:
-        """The problem to solve: the base with ``init`` true (all other boolean atoms
-        false) and ``goal`` as its goal; the base itself when neither changes it."""
-        new_init = None if init is None else {tuple(atom) for atom in init}
-        new_goal = None if goal is None else sorted({tuple(atom) for atom in goal})
-        if new_init is not None and new_init == set(self.true_atoms):
-            new_init = None
-        if new_goal is not None and new_goal == self.goal_atoms:
-            new_goal = None
-        if new_init is None and new_goal is None:
-            return self.problem
-        from plan_bridge.pddl.up_runtime import lean_copy
-
-        # Changing boolean initial values and positive goal atoms does not change the
-        # problem kind: keep the base's instead of recomputing it on every replan.
-        problem = lean_copy(self.problem, kind=self.kind)
-        if new_init is not None:
-            for atom, fluent_exp in self.true_atoms.items():
-                if atom not in new_init:
-                    problem.set_initial_value(fluent_exp, False)
-            for atom in new_init:
-                if atom not in self.true_atoms:
-                    problem.set_initial_value(_expression(problem, atom), True)
-        if new_goal is not None:
-            problem.clear_goals()
-            for atom in new_goal:
-                problem.add_goal(_expression(problem, atom))
-        return problem
-
-
-def _atom_of(fluent_exp: Any) -> tuple[str, ...]:
-    return (fluent_exp.fluent().name, *(arg.object().name for arg in fluent_exp.args))
-
-
-def _expression(problem: Any, atom: Sequence[str]) -> Any:
-    return problem.fluent(atom[0])(*(problem.object(name) for name in atom[1:]))
-
-
-def _conjunctive_goal(goals: Iterable[Any]) -> list[tuple[str, ...]] | None:
-    """The goal's atoms, sorted, if it is a conjunction of positive ground atoms."""
-    atoms: list[tuple[str, ...]] = []
-    pending = list(goals)
-    while pending:
-        node = pending.pop()
-        if node.is_and():
-            pending.extend(node.args)
-        elif node.is_fluent_exp() and all(arg.is_object_exp() for arg in node.args):
-            atoms.append(_atom_of(node))
-        elif not node.is_true():
-            return None
-    return sorted(set(atoms))
-
-
-_bases: OrderedDict[str, _Base] = OrderedDict()
-
-
-def _parse_base(reader: Any, request: dict[str, Any]) -> float:
-    """Parse the request's text into the cache under its key: the time it took."""
-    import warnings
-
-    started = time.monotonic()
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the client reported them when it loaded the task
-        base = _Base(reader.parse_problem_string(request["domain"], request["problem"]))
-    _bases[request["base"]] = base
-    while len(_bases) > BASE_CACHE_SIZE:
-        _bases.popitem(last=False)
-    return time.monotonic() - started
-
-
-def _parse_request(reader: Any, request: dict[str, Any]) -> dict[str, Any]:
-    if request["base"] in _bases:
-        _bases.move_to_end(request["base"])
-        return {"outcome": "parsed", "parse_time_s": 0.0}
-    try:
-        return {"outcome": "parsed", "parse_time_s": _parse_base(reader, request)}
-    except Exception as exc:
-        # The client parses the same text and reports the error properly.
-        return {"outcome": "error", "error_type": type(exc).__name__, "message": str(exc)}
-
-
-def _solve_request(reader: Any, request: dict[str, Any]) -> dict[str, Any]:
-    import warnings
-
-    from unified_planning.shortcuts import OneshotPlanner  # type: ignore[import-untyped]
-
-    key = request["base"]
-    reused = key in _bases
-    parse_time = 0.0
-    if not reused:
-        if request.get("domain") is None or request.get("problem") is None:
-            return {"outcome": "missing-base"}
-        parse_time = _parse_base(reader, request)
-    base = _bases[key]
-    _bases.move_to_end(key)
-    started = time.monotonic()
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        try:
-            problem = base.derive(request.get("init"), request.get("goal"))
-            with OneshotPlanner(name=request["engine"], params=request.get("params")) as planner:
-                result = planner.solve(problem, timeout=request["timeout"])
-        except Exception as exc:
-            return {
-                "outcome": "error",
-                "error_type": type(exc).__name__,
-                "message": str(exc),
-                "warnings": [str(w.message) for w in caught],
-                "engine_time_s": time.monotonic() - started,
-                "parse_time_s": parse_time,
-            }
-    plan = []
-    if result.plan is not None:
-        plan = [
-            [instance.action.name, [arg.object().name for arg in instance.actual_parameters]]
-            for instance in result.plan.actions
-        ]
-    log = "\n".join(m.message for m in (result.log_messages or []) if m.message.strip())
-    return {
-        "outcome": "result",
-        "status": result.status.name,
-        "plan": plan,
-        "warnings": [str(w.message) for w in caught],
-        "log": log[-4000:],
-        "engine_time_s": time.monotonic() - started,
-        "parse_time_s": parse_time,
-        "reused": reused,
-    }
-
-
-def _main() -> None:
-    # Our replies own the real stdout; anything an engine prints goes to stderr.
-    replies = os.fdopen(os.dup(sys.stdout.fileno()), "w", encoding="utf-8")
-    os.dup2(sys.stderr.fileno(), sys.stdout.fileno())
-    serve(sys.stdin, replies)
-
-
-if __name__ == "__main__":
-    _main()
