@@ -15,7 +15,7 @@ import bisect
 import threading
 import time
 from collections.abc import Callable, Iterable, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import smach
 from plan_bridge.execution.compile import CompiledPlan, StepRecord, compile_plan
@@ -31,6 +31,9 @@ from plan_bridge.planning.planner import Planner, PlanResult, PlanStep, get_plan
 from plan_bridge.skills.registry import SkillRegistry
 from smach.introspection.events import stamp
 
+if TYPE_CHECKING:
+    from plan_bridge.execution.control import MissionControl
+
 __all__ = ["ExecutionReport", "Executive", "ReplanPolicy"]
 
 OUTCOMES = ("succeeded", "aborted", "preempted")
@@ -42,6 +45,9 @@ class Executive(smach.Container):
     Outcomes: ``succeeded`` (goal reached), ``aborted`` (no plan, budget exhausted,
     unrecoverable), ``preempted``. After a run, :attr:`report` holds the numbers.
     """
+
+    #: Operator requests (skip, replan, new goal, abort): see execution/control.py.
+    operator: MissionControl | None = None
 
     def __init__(
         self,
@@ -195,9 +201,13 @@ class Executive(smach.Container):
             plan = list(initial.actions)
         while True:
             self._check_preempt()
+            if self.operator is not None:  # an operator request replaces the plan
+                plan = self.operator.take(self, plan)
             first = self._next_label
             outcome, failed = self._run_plan(plan, first)
             self._next_label = max(self._records, default=first - 1) + 1
+            if self.operator is not None and self.operator.pending() is not None:
+                continue  # the operator stopped this plan: take the request
             if outcome == "preempted":
                 self._decide("stop", "preempted")
                 return "preempted"

@@ -1,0 +1,325 @@
+"""Operator control of a running mission: skip a step, replan now, a new goal, abort.
+
+:class:`MissionControl` is the plan-level half of runtime control (the state-level
+half, pause/step/breakpoints/force, is :class:`smach.control.Controller`). A request
+is stored and the plan machine in force is preempted; the :class:`Executive` takes
+the request where its loop would otherwise stop or start the next plan
+(``Executive.operator``):
+
+* **skip** the running step: it is marked done (in the report and for checkpoints),
+  with its effects applied to the belief or not, and the rest of the plan goes on;
+  without its effects the next step may be found invalid, and the ordinary
+  validate -> repair -> replan ladder takes over;
+* **replan** from the current belief (it counts as a replan of the budget);
+* **change the goal**: plan from the current belief to the new goal (ground atoms);
+  from then on the mission succeeds when the new goal holds;
+* **abort**: the running step is preempted and the mission ends ``aborted``.
+
+One request is pending at a time: a later request replaces an earlier one, except
+that an abort is never replaced. A request is taken at the latest when the plan in
+force ends. Every request is recorded through the tree's controller (when one is
+attached) so the journal shows what, from where and when.
+
+(This module reads the executive's plan bookkeeping, ``_plan_in_force``,
+``_records``, ...: it is the executive's other half, kept apart so that the
+executive's loop stays readable.)
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import threading
+from collections.abc import Iterable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Literal
+
+from plan_bridge.errors import FactError, PlanBridgeError
+from plan_bridge.execution.compile import StepRecord, StepState
+from plan_bridge.execution.replanner import MissionEnded
+from plan_bridge.execution.semantics import ActionModel
+from plan_bridge.pddl.source import SourceText
+from plan_bridge.pddl.task import Fact, FactLike, PlanningTask, format_fact, parse_fact
+from plan_bridge.pddl.up_runtime import ensure_unified_planning
+from smach.control import Controller, controller_of
+
+if TYPE_CHECKING:
+    from plan_bridge.execution.executive import Executive
+    from plan_bridge.planning.planner import PlanStep
+
+__all__ = ["MissionControl", "MissionControlError", "OperatorRequest", "task_with_goal"]
+
+RequestKind = Literal["skip", "replan", "goal", "abort"]
+
+
+class MissionControlError(PlanBridgeError):
+    """An operator request that cannot be carried out (what, where, what is allowed)."""
+
+
+@dataclass(frozen=True)
+class OperatorRequest:
+    """A pending operator request (see the module documentation)."""
+
+    kind: RequestKind
+    source: str
+    reason: str
+    step_index: int | None = None
+    apply_effects: bool = False
+    task: PlanningTask | None = None
+
+
+def task_with_goal(task: PlanningTask, goal: Iterable[FactLike]) -> PlanningTask:
+    """A copy of ``task`` whose goal is the conjunction of the ground atoms ``goal``.
+
+    Raises :class:`FactError` for an atom that does not fit the task (unknown
+    predicate or object, wrong arity or type) and for an empty goal.
+    """
+    atoms = tuple(sorted({task.check_fact(f) for f in goal}))
+    if not atoms:
+        raise FactError("a goal needs at least one atom, e.g. (at robot1 kitchen)")
+    ensure_unified_planning()
+    from unified_planning.shortcuts import And  # type: ignore[import-untyped]
+
+    problem = task.problem.clone()
+    problem.clear_goals()
+    problem.add_goal(
+        And(
+            *(problem.fluent(atom[0])(*(problem.object(arg) for arg in atom[1:])) for atom in atoms)
+        )
+    )
+    text = None
+    if task.problem_text is not None:
+        source = SourceText(task.problem_text, str(task.problem_path or "<problem>"), "problem")
+        body = " ".join("(" + " ".join(atom) + ")" for atom in atoms)
+        for head, start, end in source.sections():
+            if head == ":goal":
+                text = source.text[:start] + f"(:goal (and {body}))" + source.text[end:]
+                break
+    return dataclasses.replace(
+        task, problem=problem, goal_facts=atoms, goal_is_conjunctive=True, problem_text=text
+    )
+
+
+def parse_goal(text: str | Iterable[FactLike]) -> list[Fact]:
+    """``"(at r1 lab) (holding r1 cup)"`` or a list of facts -> facts."""
+    if not isinstance(text, str):
+        return [parse_fact(f) for f in text]
+    facts: list[Fact] = []
+    depth = 0
+    start = 0
+    for i, ch in enumerate(text):
+        if ch == "(":
+            if depth == 0:
+                start = i
+            depth += 1
+        elif ch == ")":
+            depth -= 1
+            if depth < 0:
+                raise FactError(f"goal {text!r}: unbalanced ')' at column {i + 1}")
+            if depth == 0:
+                facts.append(parse_fact(text[start : i + 1]))
+        elif depth == 0 and not ch.isspace():
+            raise FactError(
+                f"goal {text!r}: expected atoms in parentheses like (at robot1 kitchen), "
+                f"found {ch!r} at column {i + 1}"
+            )
+    if depth:
+        raise FactError(f"goal {text!r}: unbalanced '('")
+    return facts
+
+
+class MissionControl:
+    """Skip, replan, new goal and abort for one :class:`Executive` (from any thread)."""
+
+    def __init__(self, executive: Executive, controller: Controller | None = None) -> None:
+        if executive.operator is not None:
+            raise MissionControlError(f"executive {executive.path} already has a MissionControl")
+        self.executive = executive
+        self._controller = controller
+        self._lock = threading.Lock()
+        self._pending: OperatorRequest | None = None
+        executive.operator = self
+
+    def close(self) -> None:
+        """Detach from the executive (a pending request is dropped)."""
+        with self._lock:
+            self._pending = None
+        if self.executive.operator is self:
+            self.executive.operator = None
+
+    @property
+    def controller(self) -> Controller | None:
+        return self._controller or controller_of(self.executive)
+
+    # -- requests --------------------------------------------------------------------------
+    def skip(
+        self, step: str | int | None = None, *, apply_effects: bool, source: str = "api"
+    ) -> OperatorRequest:
+        """Skip the running step (or the running one named by label or plan index)."""
+        state = self._running_step(step)
+        effects = "with its effects" if apply_effects else "without its effects"
+        return self._request(
+            OperatorRequest(
+                "skip",
+                source,
+                f"operator ({source}) skipped {state.ground.step} {effects}",
+                step_index=state.index,
+                apply_effects=apply_effects,
+            ),
+            state.path,
+        )
+
+    def replan(self, *, source: str = "api") -> OperatorRequest:
+        """Replan from the current belief now."""
+        self._check_running()
+        return self._request(
+            OperatorRequest("replan", source, f"operator ({source}) asked for a replan")
+        )
+
+    def change_goal(
+        self, goal: str | Iterable[FactLike], *, source: str = "api"
+    ) -> OperatorRequest:
+        """Plan from the current belief to ``goal`` (atoms, or text ``"(at r1 lab) ..."``)."""
+        self._check_running()
+        atoms = parse_goal(goal)
+        task = task_with_goal(self.executive.task, atoms)
+        shown = " ".join(format_fact(f) for f in task.goal_facts)
+        return self._request(
+            OperatorRequest(
+                "goal", source, f"operator ({source}) changed the goal to {shown}", task=task
+            )
+        )
+
+    def abort(self, reason: str = "", *, source: str = "api") -> OperatorRequest:
+        """End the mission ``aborted`` after the running step stops."""
+        self._check_running()
+        why = f": {reason}" if reason else ""
+        return self._request(
+            OperatorRequest("abort", source, f"aborted by the operator ({source}){why}")
+        )
+
+    def pending(self) -> OperatorRequest | None:
+        with self._lock:
+            return self._pending
+
+    # -- the executive's hook ----------------------------------------------------------------
+    def take(self, executive: Executive, plan: list[PlanStep]) -> list[PlanStep]:
+        """Carry out the pending request (in the executive's thread); the plan to run next.
+
+        Raises :class:`MissionEnded` for an abort, when a new goal already holds, and
+        when no plan reaches the (new) goal.
+        """
+        with self._lock:
+            request, self._pending = self._pending, None
+        if request is None:
+            return plan
+        executive._decide("operator", request.reason)
+        if request.kind == "abort":
+            raise MissionEnded("aborted", request.reason)
+        if request.kind == "skip":
+            return self._skip(executive, request)
+        replanner = executive._replanner
+        recovery = executive._recovery
+        if request.task is not None:
+            model = ActionModel(request.task)
+            executive.task, executive.model = request.task, model
+            if replanner is not None:
+                replanner.task, replanner.model = request.task, model
+            if recovery is not None:
+                recovery.model = model
+        if executive.model.goal_holds(executive.belief.facts):
+            raise MissionEnded("succeeded", f"{request.reason}; the goal holds")
+        assert replanner is not None  # set before the first plan runs
+        result = replanner.plan(request.reason, replan=True)
+        if not result.solved:
+            raise MissionEnded(
+                "aborted",
+                f"{request.reason}: no plan ({result.status.value}): {result.explanation}",
+            )
+        executive.report.replans += 1
+        if recovery is not None:
+            recovery.generation += 1  # retries are counted per plan
+        return list(result.actions)
+
+    def _skip(self, executive: Executive, request: OperatorRequest) -> list[PlanStep]:
+        first = executive._first_in_force
+        in_force = executive._plan_in_force
+        index = request.step_index
+        assert index is not None
+        if first <= index < first + len(in_force) and not executive._succeeded(index):
+            step = in_force[index - first]
+            if request.apply_effects:
+                ground = executive.model.ground(step)
+                with executive.belief.locked() as facts:
+                    adds, dels = ground.effects(facts)
+                executive.belief.apply(adds, dels)
+            executive._step_finished(
+                StepRecord(index, step, outcome="succeeded", skill_outcome="skipped")
+            )
+        return [
+            step
+            for i, step in enumerate(in_force, start=first)
+            if i != index and not executive._succeeded(i)
+        ]
+
+    # -- internals -----------------------------------------------------------------------------
+    def _check_running(self) -> None:
+        if not self.executive.is_running():
+            raise MissionControlError(
+                f"executive {self.executive.path}: the mission is not running; skip, replan, "
+                f"goal and abort act on a running mission"
+            )
+
+    def _running_step(self, step: str | int | None) -> StepState:
+        self._check_running()
+        compiled = self.executive._compiled
+        states = compiled.step_states if compiled is not None else []
+        running = [s for s in states if s.is_running()]
+        if step is None:
+            if len(running) == 1:
+                return running[0]
+            if not running:
+                raise MissionControlError(
+                    f"executive {self.executive.path}: no step is running (planning, or "
+                    f"between steps); try again or name a step"
+                )
+            raise MissionControlError(
+                f"executive {self.executive.path}: {len(running)} steps are running ("
+                + ", ".join(s.path.rsplit("/", 1)[-1] for s in running)
+                + "); name one"
+            )
+        for state in running:
+            label = state.path.rsplit("/", 1)[-1]
+            if step in (state.index, label, str(state.index)):
+                return state
+        names = ", ".join(f"{s.index} ({s.path.rsplit('/', 1)[-1]})" for s in running) or "none"
+        raise MissionControlError(
+            f"executive {self.executive.path}: step {step!r} is not running; running: {names}"
+        )
+
+    def _request(self, request: OperatorRequest, path: str = "") -> OperatorRequest:
+        with self._lock:
+            pending = self._pending
+            if pending is not None and pending.kind == "abort":
+                raise MissionControlError(
+                    f"executive {self.executive.path}: an abort is already pending; "
+                    f"{request.kind} refused"
+                )
+            self._pending = request
+        controller = self.controller
+        if controller is not None:
+            details: dict[str, object] = {"reason": request.reason}
+            if pending is not None:
+                details["replaces"] = pending.kind
+            if request.kind == "skip":
+                details["apply_effects"] = request.apply_effects
+            if request.task is not None:
+                details["goal"] = [format_fact(f) for f in request.task.goal_facts]
+            controller.note(
+                request.kind, source=request.source, path=path or self.executive.path, **details
+            )
+        # The plan in force stops at once (its running steps are preempted); when no
+        # plan runs yet, the executive takes the request before it starts the next one.
+        compiled = self.executive._compiled
+        if compiled is not None:
+            compiled.machine.request_preempt()
+        return request
