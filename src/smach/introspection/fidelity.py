@@ -49,8 +49,10 @@ def _paths(tree: dict[str, Any] | None) -> set[str]:
     return found
 
 
-def _independent_active(active: set[str], record: dict[str, Any]) -> None:
+def _independent_active(active: set[str], record: dict[str, Any], root: str) -> None:
     kind, path = record["kind"], record.get("path", "")
+    if kind == "container_started" and path == root:
+        active.clear()  # a new run of the root (a resume): the old one is over
     if kind in ("container_started", "state_entered"):
         active.add(path)
     elif kind in ("state_exited", "container_terminated", "error"):
@@ -103,10 +105,14 @@ def journal_problems(path: str | os.PathLike[str], *, every: int = 1) -> list[st
     if changes and wholes and max(changes) >= max(wholes):
         problems.append("a checkpoint change is as large as a whole checkpoint")
     history = History(header, limit=len(records) + 1)
+    first = header.get("structure") or next(
+        (r["structure"] for r in records if r.get("kind") == "structure"), {}
+    )
+    root = str(first.get("path", "/ROOT"))
     active: set[str] = set()
     for n, record in enumerate(records, 1):
         history.add(record)
-        _independent_active(active, record)
+        _independent_active(active, record, root)
         if n % every and n != len(records):
             continue
         view = history.view_at(n)

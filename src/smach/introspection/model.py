@@ -86,6 +86,10 @@ class ViewModel:
         if not self.active or self._is_root(path):
             self.running = True
             self.root_outcome = None
+        if self._is_root(path):
+            # The root starts again (a resumed run): nothing of the run before is active,
+            # even the states a killed process never saw end.
+            self.active.clear()
         self.active[path] = None
         self.error_paths.pop(path, None)
 
@@ -153,7 +157,7 @@ class ViewModel:
             self.structure = graft(self.structure, dict(tree), path)
             self.structure_version += 1
             # The machine that was at ``path`` is gone: nothing of it is active any more.
-            if path and self.structure is not None and path != self.structure.get("path"):
+            if path:
                 prefix = path + "/"
                 for gone in [p for p in self.active if p.startswith(prefix)]:
                     del self.active[gone]
