@@ -105,7 +105,7 @@ def journal_problems(path: str | os.PathLike[str], *, every: int = 1) -> list[st
     if changes and wholes and max(changes) >= max(wholes):
         problems.append("a checkpoint change is as large as a whole checkpoint")
     history = History(header, limit=len(records) + 1)
-    first = header.get("structure") or next(
+    first: dict[str, Any] = header.get("structure") or next(
         (r["structure"] for r in records if r.get("kind") == "structure"), {}
     )
     root = str(first.get("path", "/ROOT"))
