@@ -77,13 +77,16 @@ def task_with_goal(task: PlanningTask, goal: Iterable[FactLike]) -> PlanningTask
     if not atoms:
         raise FactError("a goal needs at least one atom, e.g. (at robot1 kitchen)")
     ensure_unified_planning()
-    from unified_planning.shortcuts import And  # type: ignore[import-untyped]
-
     problem = task.problem.clone()
     problem.clear_goals()
+    # Built with the problem's own expression manager: no unified_planning import here.
+    manager = problem.environment.expression_manager
     problem.add_goal(
-        And(
-            *(problem.fluent(atom[0])(*(problem.object(arg) for arg in atom[1:])) for atom in atoms)
+        manager.And(
+            *(
+                problem.fluent(atom[0])(*(problem.object(arg) for arg in atom[1:]))
+                for atom in atoms
+            )
         )
     )
     text = None
