@@ -52,12 +52,16 @@ import os
 import platform
 import random
 import sys
+import tempfile
 import threading
 import time
 import timeit
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
+from pathlib import Path
 from typing import Any
+
+import core_compare
 
 import smach
 
@@ -244,8 +248,10 @@ def run_interleaved(benches: list[Bench], cfg: Config) -> dict[str, Result]:
         if floor is not None:
             # Per round: this scenario's sample over the function-call sample of the same
             # round; robust to the machine speeding up or slowing down during the run.
-            ratios = [a / b for a, b in zip(bench.samples, floor.samples, strict=True)]
-            res.calls = Result("", "", 0, "", ratios).median
+            # (A floor sample of 0: the call was lost in the noise of a loaded machine.)
+            pairs = zip(bench.samples, floor.samples, strict=True)
+            ratios = [a / b for a, b in pairs if b > 0]
+            res.calls = Result("", "", 0, "", ratios).median if ratios else None
         results[bench.name] = res
         progress(
             f"{bench.name}: median {res.median:.4g} us ({cfg.trials} trials x {bench.reps} reps)"
@@ -809,8 +815,29 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="small sizes, a few seconds")
     parser.add_argument("--json", metavar="FILE", help="also write the results as JSON")
+    parser.add_argument(
+        "--original",
+        metavar="DIR",
+        help="a checkout of the original SMACH (ros/executive_smach): measure its core in "
+        "this run, in every logging configuration (see core_compare.py)",
+    )
+    parser.add_argument(
+        "--original-git",
+        metavar="URL",
+        help="clone the original SMACH from URL into a temporary directory and measure it",
+    )
     args = parser.parse_args(argv)
     cfg = QUICK if args.quick else FULL
+    with tempfile.TemporaryDirectory(prefix="core_bench-") as tmp:
+        original_dir = args.original
+        if args.original_git:
+            progress(f"cloning {args.original_git}")
+            original_dir = str(core_compare.clone(args.original_git, Path(tmp)))
+        original = core_compare.load_original(Path(original_dir)) if original_dir else None
+        return measure(args, cfg, original)
+
+
+def measure(args: argparse.Namespace, cfg: Config, original: Any) -> int:
 
     # No INFO logging during measurement: keep the default loggers, silence the
     # Python loggers the libraries use (smach logs INFO only when its logger is on).
@@ -830,12 +857,21 @@ def main(argv: list[str] | None = None) -> int:
     started = time.perf_counter()
     try:
         results = run_all(cfg)
+        vs_original = None
+        if original is not None:
+            progress("the original SMACH core, same run")
+            vs_original = core_compare.compare(
+                cfg, smach, original, Bench, run_interleaved, progress
+            )
     finally:
         for logger_name, level in levels.items():
             logging.getLogger(logger_name).setLevel(level)
     load = (load_before, os.getloadavg()[0])
     progress(f"done in {time.perf_counter() - started:.1f} s")
     summary = report(results, cfg, load)
+    if vs_original is not None:
+        lines, summary["same_run_original"] = core_compare.report(vs_original, cfg)
+        print("\n".join(lines), flush=True)
 
     if args.json:
         doc = {
@@ -846,6 +882,12 @@ def main(argv: list[str] | None = None) -> int:
             "config": asdict(cfg),
             "results": {name: asdict(res) for name, res in results.items()},
             "original": {k: list(v) if isinstance(v, tuple) else v for k, v in ORIGINAL.items()},
+            "original_same_run": None
+            if vs_original is None
+            else {
+                config: {name: asdict(res) for name, res in res_map.items()}
+                for config, res_map in vs_original.items()
+            },
             **summary,
         }
         with open(args.json, "w", encoding="utf-8") as fh:

@@ -30,6 +30,7 @@ from __future__ import annotations
 import contextlib
 import functools
 import threading
+import types
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from typing import Any, Concatenate, Generic, ParamSpec, TypeVar
 
@@ -76,19 +77,25 @@ class construction_method(Generic[C, P, R]):  # noqa: N801  (reads like a decora
     def __init__(self, fn: Callable[Concatenate[C, P], R]) -> None:
         self._fn = fn
         functools.update_wrapper(self, fn)  # type: ignore[arg-type]
+        # The class-level callable of each owner class, built once (building one per
+        # call would cost a functools.wraps per added state).
+        self._on_class: dict[type[C], Callable[P, R]] = {}
 
     def __get__(self, obj: C | None, objtype: type[C] | None = None) -> Callable[P, R]:
         fn = self._fn
         if obj is not None:
-            return functools.partial(fn, obj)
-        owner = objtype
+            return types.MethodType(fn, obj)
+        assert objtype is not None
+        on_class = self._on_class.get(objtype)
+        if on_class is None:
+            owner = objtype
 
-        @functools.wraps(fn)
-        def on_open_container(*args: P.args, **kwargs: P.kwargs) -> R:
-            assert owner is not None
-            return fn(owner._currently_opened_container(), *args, **kwargs)
+            @functools.wraps(fn)
+            def on_open_container(*args: P.args, **kwargs: P.kwargs) -> R:
+                return fn(owner._currently_opened_container(), *args, **kwargs)
 
-        return on_open_container
+            on_class = self._on_class[objtype] = on_open_container
+        return on_class
 
 
 def _label_problem(label: object) -> str | None:
@@ -335,8 +342,10 @@ class Container(ContainerEvents, State):
                     f"{self._path}: the {type(self).__name__} ended with {outcome!r}, which is "
                     f"not one of its outcomes: {', '.join(self._outcomes)}"
                 )
-            if bus.listeners or self._local or self._log_info:
+            if bus.listeners or self._local:
                 self._emit_terminated(self._terminal_states(), outcome, self._thread)
+            elif self._log_info:
+                self._log_terminated(self._terminal_states(), outcome)
             if parent_ud is not None and self._output_keys:
                 self._copy_output_keys(parent_ud)
             return outcome

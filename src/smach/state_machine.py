@@ -385,6 +385,10 @@ class StateMachine(Container):
         finally:
             self._current_slot = None
 
+    def _start_states(self) -> list[str]:
+        # (Never None during a run: the consistency check saw to it.)
+        return [self._initial_state_label]  # type: ignore[list-item]
+
     def _terminal_states(self) -> list[str]:
         return [self._last_label]
 
@@ -511,7 +515,7 @@ class StateMachine(Container):
     def _log_started(self, initial_states: Sequence[str]) -> None:
         smach.loginfo(
             f"State machine starting in initial state '{initial_states[0]}' with "
-            f"userdata: \n\t{list(self._userdata.keys())}"
+            f"userdata: \n\t{list(self._userdata._data)}"
         )
 
     def _log_transition(self, source: str, outcome: str, target: str) -> None:

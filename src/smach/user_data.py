@@ -329,6 +329,10 @@ class Remapper(UserData):
 _REMAPPER_CLASSES: dict[
     tuple[frozenset[str], frozenset[str], tuple[tuple[str, str], ...]], type[Remapper]
 ] = {}
+_REMAPPER_CACHE: dict[
+    tuple[tuple[str, ...], tuple[str, ...], tuple[tuple[str, str], ...]],
+    tuple[type[Remapper], frozenset[str], frozenset[str], frozenset[str]],
+] = {}
 
 
 def _fast_setattr(self: Remapper, name: str, value: Any) -> None:
@@ -372,10 +376,32 @@ def make_remapper(
     writer: str = "",
 ) -> Remapper:
     """A :class:`Remapper` with fast attribute access to the declared keys."""
-    ins, outs = frozenset(input_keys), frozenset(output_keys)
-    remap = dict(remapping or {})
+    remap = dict(remapping) if remapping else {}
     if isinstance(ud, Remapper):
-        return Remapper(ud, ins, outs, remap, owner=owner, writer=writer)
+        return Remapper(ud, input_keys, output_keys, remap, owner=owner, writer=writer)
+    # Keyed on the declaration as given (tuples, as State reports them): no sets are
+    # built for an interface seen before. Many states of a machine share one.
+    key = (tuple(input_keys), tuple(output_keys), tuple(remap.items()))
+    entry = _REMAPPER_CACHE.get(key)
+    if entry is None:
+        entry = _REMAPPER_CACHE[key] = _remapper_class(frozenset(key[0]), frozenset(key[1]), remap)
+    cls, ins, outs, rw = entry
+    view = object.__new__(cls)
+    set_ = object.__setattr__
+    set_(view, "_ud", ud)
+    set_(view, "_d", ud._data)
+    set_(view, "_in", ins)
+    set_(view, "_out", outs)
+    set_(view, "_rw", rw)
+    set_(view, "_remap", remap)
+    set_(view, "_owner", owner)
+    set_(view, "_writer", writer)
+    return view
+
+
+def _remapper_class(
+    ins: frozenset[str], outs: frozenset[str], remap: dict[str, str]
+) -> tuple[type[Remapper], frozenset[str], frozenset[str], frozenset[str]]:
     signature = (ins, outs, tuple(sorted(remap.items())))
     cls = _REMAPPER_CLASSES.get(signature)
     if cls is None:
@@ -390,4 +416,4 @@ def make_remapper(
             namespace[key] = _key_property(key, remap.get(key, key), key not in outs)
         cls = type("Remapper", (Remapper,), namespace)
         _REMAPPER_CLASSES[signature] = cls
-    return cls(ud, ins, outs, remap, owner=owner, writer=writer)
+    return cls, ins, outs, ins & outs

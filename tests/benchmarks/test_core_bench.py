@@ -55,3 +55,38 @@ def test_core_bench_quick_reports_every_scenario(tmp_path: Path) -> None:
     data = json.loads(out.read_text(encoding="utf-8"))
     assert data["mode"] == "quick"
     assert set(SCENARIOS) <= set(data["results"])
+
+
+@pytest.mark.timeout(300)
+def test_core_bench_compares_with_an_original_core_in_every_logging_configuration(
+    tmp_path: Path,
+) -> None:
+    # Any SMACH-compatible core can stand in for the original: ours, loaded as a second
+    # package from the source tree, exercises the loading and the comparison table.
+    out = tmp_path / "core_bench.json"
+    proc = subprocess.run(
+        [
+            sys.executable,
+            str(SCRIPT),
+            "--quick",
+            "--original",
+            str(ROOT / "src"),
+            "--json",
+            str(out),
+        ],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=240,
+        check=False,
+    )
+    assert proc.returncode == 0, f"stdout:\n{proc.stdout}\nstderr:\n{proc.stderr}"
+    assert "Against the original SMACH core" in proc.stdout
+    for row in ("chain            repeated", "chain            first", "nested           first"):
+        assert row in proc.stdout, proc.stdout
+    data = json.loads(out.read_text(encoding="utf-8"))
+    same_run = data["original_same_run"]
+    assert set(same_run) == {"default", "noop", "format"}
+    assert "remap_loop/first/original" in same_run["noop"]
+    aims = data["same_run_original"]["aims"]
+    assert {a["aim"].split(" ")[0] for a in aims} >= {"chain", "remap_loop", "nested", "iterator"}
