@@ -100,6 +100,7 @@ class DeliveryWorld(SimulatedWorld):
 
     def _spend(self, robot: str, activity: str) -> None:
         self._clock[robot] += DURATIONS[activity]
+        self.elapse(DURATIONS[activity])  # each robot's own clock: paced per robot
 
     def inject(
         self, kind: str, action: str, detail: str = "", *, robot: str | None = None

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import random
 import threading
+import time
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -58,7 +59,10 @@ class SimulatedWorld:
 
     state: ClassVar[tuple[str, ...]] = ("_facts", "sim_time", "actions_run", "faults", "rng")
     constant: ClassVar[tuple[str, ...]] = ("task", "model", "fail_rate", "variant")
-    wiring: ClassVar[tuple[str, ...]] = ("_lock",)
+    wiring: ClassVar[tuple[str, ...]] = ("_lock", "time_scale")
+
+    #: Wall seconds per simulated second (``plan-bridge run --time-scale``); 0: no waiting.
+    time_scale: float = 0.0
 
     #: Simulated seconds one symbolic action takes.
     action_duration = 1.0
@@ -87,10 +91,22 @@ class SimulatedWorld:
         self.fail_rate = fail_rate
         self.variant = variant
         self._facts: set[Fact] = set(task.initial_facts if facts is None else facts)
-        self._lock = threading.Lock()
+        self._lock = _PacedLock()
         self.faults: list[Fault] = []
         self.sim_time = 0.0
         self.actions_run = 0
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if name == "sim_time" and self.time_scale > 0:
+            self.elapse(float(value) - float(self.sim_time))
+        object.__setattr__(self, name, value)
+
+    def elapse(self, seconds: float) -> None:
+        """Simulated ``seconds`` passed: with a :attr:`time_scale`, the calling thread
+        waits ``seconds x time_scale`` wall seconds, after it releases the world's lock
+        (worlds move their clocks with the lock held; other robots go on meanwhile)."""
+        if self.time_scale > 0 and seconds > 0:
+            self._lock.owe(seconds * self.time_scale)
 
     @property
     def faults_injected(self) -> int:
@@ -157,7 +173,7 @@ class SimulatedWorld:
         values = {name: decode(data[name], name) for name in names}
         with self._lock:
             for name, value in values.items():
-                setattr(self, name, value)
+                object.__setattr__(self, name, value)  # no pacing: nothing happens
 
     def goal_reached(self) -> bool:
         """Whether the task's goal holds in the true world."""
@@ -193,6 +209,43 @@ class SimulatedWorld:
                 state.update(adds)
             observations = [(fact, fact in state) for fact in sorted(touched)]
         return ok, observations
+
+
+class _PacedLock:
+    """The world's lock; a thread that owes wall time (:meth:`SimulatedWorld.elapse`)
+    waits when it releases the lock, so that other threads can use the world meanwhile."""
+
+    __slots__ = ("_local", "_lock")
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._local = threading.local()
+
+    def owe(self, seconds: float) -> None:
+        self._local.debt = getattr(self._local, "debt", 0.0) + seconds
+
+    def __enter__(self) -> bool:
+        return self._lock.acquire()
+
+    def __exit__(self, *exc: object) -> None:
+        self._lock.release()
+        debt = getattr(self._local, "debt", 0.0)
+        if debt > 0:
+            self._local.debt = 0.0
+            time.sleep(min(debt, MAX_WAIT))
+
+    def acquire(self, blocking: bool = True, timeout: float = -1) -> bool:
+        return self._lock.acquire(blocking, timeout)
+
+    def release(self) -> None:
+        self._lock.release()
+
+    def locked(self) -> bool:
+        return self._lock.locked()
+
+
+MAX_WAIT = 10.0
+"""The longest wall wait of one paced activity, seconds (a long charge stays watchable)."""
 
 
 class SymbolicSkill(smach.State):
