@@ -32,7 +32,10 @@ if TYPE_CHECKING:
 
 __all__ = ["ProgressPrinter"]
 
-DEFAULT_FAIL_RATE = 0.1
+DEFAULT_FAIL_RATE = 0.2
+"""High enough that the default run of a domain folder shows a fault and the recovery."""
+VIEWER_TIME_SCALE = 0.1
+"""Wall seconds per simulated second of a simulated mission shown in the viewer."""
 
 
 _probability = bounded(float, 0.0, 1.0, "a probability between 0 and 1")
@@ -81,7 +84,20 @@ def _configure_run(parser: argparse.ArgumentParser) -> None:
         const=0,
         type=_non_negative_int,
         metavar="PORT",
-        help="serve the live viewer on 127.0.0.1 while the mission runs (default port: any free one)",
+        help="serve the live viewer on 127.0.0.1 while the mission runs and after it, until "
+        "Ctrl-C (default port: any free one); the simulated world runs at --time-scale",
+    )
+    parser.add_argument(
+        "--time-scale",
+        type=bounded(float, 0.0, 1e6, "seconds >= 0"),
+        default=None,
+        metavar="S",
+        help="wall seconds per simulated second of the simulated world (default: "
+        f"{VIEWER_TIME_SCALE} with --viewer, else 0: as fast as it goes); with --ros, of the "
+        "robot started here (default 0.01)",
+    )
+    parser.add_argument(
+        "-v", "--verbose", action="store_true", help="also print the states each step enters"
     )
     parser.add_argument(
         "--resume",
@@ -112,13 +128,6 @@ def _configure_run(parser: argparse.ArgumentParser) -> None:
         metavar="NAME",
         help="with --ros: the robot's action and service prefix (default: robot with "
         "--no-robot, robot_PID for a robot started here)",
-    )
-    ros.add_argument(
-        "--time-scale",
-        type=bounded(float, 0.0, 1e6, "seconds >= 0"),
-        default=0.01,
-        metavar="S",
-        help="with --ros: wall seconds per simulated second on the robot started here (default 0.01)",
     )
 
 
@@ -193,7 +202,7 @@ def _connect_robot(
         start_robot=not args.no_robot,
         seed=args.seed,
         fail_rate=fail_rate,
-        time_scale=args.time_scale,
+        time_scale=0.01 if args.time_scale is None else args.time_scale,
         log=None if args.quiet else sys.stderr,
     )
     resources.callback(robot.close)
@@ -280,6 +289,9 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
         concurrent=setup.concurrent or args.concurrent,
     )
     world = setup.world
+    if robot is None and hasattr(world, "time_scale"):
+        default_scale = VIEWER_TIME_SCALE if args.viewer is not None else 0.0
+        world.time_scale = default_scale if args.time_scale is None else args.time_scale
     if checkpoint is not None:
         if checkpoint.get("world") is not None and hasattr(world, "restore"):
             world.restore(checkpoint["world"])
@@ -297,7 +309,7 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
             file=out,
             flush=True,
         )
-        executive.add_listener(ProgressPrinter(out))
+        executive.add_listener(ProgressPrinter(out, verbose=args.verbose))
     journal = None
     journal_path = args.resume or args.journal
     if journal_path:
@@ -337,11 +349,9 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
         executive.report.explanation = str(exc)
         print(f"plan-bridge: mission failed: {exc}", file=sys.stderr, flush=True)
     finally:
-        if viewer is not None:
-            if sys.stdin.isatty() and sys.stderr.isatty():
-                print(f"viewer: {viewer.url} (the mission ended; Ctrl-C to stop)", file=sys.stderr)
-                with contextlib.suppress(KeyboardInterrupt):
-                    viewer.wait()
+        if viewer is not None and resources is not None:
+            resources.callback(viewer.close)  # after the wait below, or on an error
+        elif viewer is not None:
             viewer.close()
         report = executive.report
         if journal is not None:
@@ -375,6 +385,15 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
         print(json.dumps(data, indent=None))
     if not args.quiet:
         print(_summary(outcome, report, faults), file=out, flush=True)
+    if viewer is not None and resources is not None:
+        # The mission is over, the page is not: keep it for whoever is looking.
+        print(
+            f"viewer: {viewer.url} - the mission ended; still serving it, Ctrl-C to stop",
+            file=sys.stderr,
+            flush=True,
+        )
+        with contextlib.suppress(KeyboardInterrupt):
+            viewer.wait()
     return EXIT_OK if report.goal_reached else EXIT_FAILED
 
 
@@ -395,10 +414,15 @@ def _summary(outcome: str | None, report: Any, faults: int | None) -> str:
 
 
 class ProgressPrinter:
-    """Prints plans, steps (with the skill's active state path) and decisions."""
+    """Prints one line per step, per plan and per recovery; ``verbose``: also the
+    states each step enters and every decision of the executive."""
 
-    def __init__(self, stream: TextIO) -> None:
+    #: Decisions printed only with ``verbose``: what was considered and not done.
+    CONSIDERED = frozenset({"repair-skipped", "repair-rejected"})
+
+    def __init__(self, stream: TextIO, *, verbose: bool = False) -> None:
         self.stream = stream
+        self.verbose = verbose
         self.total = 0
 
     def __call__(self, event: Event) -> None:
@@ -407,15 +431,19 @@ class ProgressPrinter:
 
         write = self.stream.write
         if isinstance(event, PlanComputed):
+            # A replan's reason is on its [replan] line already.
+            reason = event.reason if event.reason == "initial plan" or self.verbose else "new plan"
             if event.status == "solved":
                 self.total = len(event.steps)
                 write(
-                    f"[plan] {event.reason}: {len(event.steps)} steps "
+                    f"[plan] {reason}: {len(event.steps)} steps "
                     f"({event.planner}, {event.planning_time_s:.2f} s)\n"
                 )
             else:
-                write(f"[plan] {event.reason}: {event.status}: {event.explanation}\n")
+                write(f"[plan] {reason}: {event.status}: {event.explanation}\n")
         elif isinstance(event, ExecutiveDecision):
+            if not self.verbose and event.decision in self.CONSIDERED:
+                return
             write(f"[{event.decision}] {event.reason}\n")
         elif isinstance(event, StepFinished):
             write(
@@ -423,7 +451,7 @@ class ProgressPrinter:
                 f"{'' if event.outcome == event.skill_outcome or not event.skill_outcome else f' (skill: {event.skill_outcome})'}"
                 f" [{event.duration_s * 1000:.0f} ms]\n"
             )
-        elif isinstance(event, StateEntered) and "/SKILL/" in event.path:
+        elif self.verbose and isinstance(event, StateEntered) and "/SKILL/" in event.path:
             write(f"    {event.path}\n")
         else:
             return
