@@ -170,3 +170,22 @@ def test_a_world_restored_mid_mission_ends_as_the_world_that_was_never_stopped(
             # the steps still running had done so far: they run again from there, as
             # they would on a robot, so the end may differ (docs/reliability.md).
             assert other.world.snapshot() == end, f"{domain}: restored after {done} steps"
+
+
+def test_a_world_with_a_time_scale_waits_after_releasing_its_lock(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    from plan_bridge.execution import simulation
+    from plan_bridge.planning.planner import PlanStep
+
+    world = SimulatedWorld(rooms())
+    waits: list[tuple[float, bool]] = []
+    monkeypatch.setattr(simulation.time, "sleep", lambda s: waits.append((s, world._lock.locked())))
+    step = PlanStep("move", ("r1", "kitchen", "hall"))
+    world.perform(step)
+    assert waits == []  # no time scale: as fast as it goes
+    world.time_scale = 0.25
+    world.perform(step)
+    assert waits == [(0.25 * world.action_duration, False)]
+    world.restore(world.snapshot())  # putting a state back takes no time
+    assert len(waits) == 1
