@@ -46,11 +46,13 @@ class State:
         output_keys: Iterable[str] | None = None,
         io_keys: Iterable[str] | None = None,
     ) -> None:
-        io = key_list(io_keys, "io_keys")
+        io = key_list(io_keys, "io_keys") if io_keys is not None else []
         self._outcomes: dict[str, None] = dict.fromkeys(key_list(outcomes, "outcomes"))
-        self._input_keys: dict[str, None] = dict.fromkeys(key_list(input_keys, "input_keys") + io)
-        self._output_keys: dict[str, None] = dict.fromkeys(
-            key_list(output_keys, "output_keys") + io
+        self._input_keys: dict[str, None] = (
+            dict.fromkeys(key_list(input_keys, "input_keys") + io) if input_keys or io else {}
+        )
+        self._output_keys: dict[str, None] = (
+            dict.fromkeys(key_list(output_keys, "output_keys") + io) if output_keys or io else {}
         )
         self._preempt_requested = False
         self._preempt_event: threading.Event | None = None

@@ -53,11 +53,11 @@ class _Slot:
 
     def __init__(
         self, label: str, state: State, remapper: Remapper, constants: dict[str, Any], path: str
-    ):
+    ) -> None:
         self.label = label
         self.state = state
         self.remapper = remapper
-        self.constants = constants
+        self.constants = constants or None  # None: nothing to write (one test per step)
         self.path = path  # the child's path in events (slots are recompiled on adoption)
         self.next: dict[str, _Slot | str] = {}
 
@@ -84,6 +84,7 @@ class StateMachine(Container):
         self._preempted_state: State | None = None
         self._preempt_lock = threading.Lock()
         self._slots: dict[str, _Slot] | None = None
+        self._first: _Slot  # the initial state's slot (set by _compile)
         self._last_label = ""
         self._last_outcome: str | None = None
 
@@ -144,11 +145,11 @@ class StateMachine(Container):
             raise InvalidStateError(
                 f"{self._path}: a state labelled {label!r} was already added; labels must be unique"
             )
-        given = dict(transitions or {})
-        if isinstance(state, State):
+        given = dict(transitions) if transitions else {}
+        if given and isinstance(state, State):
             self.check_state_spec(label, state, given)
         self._adopt_child(label, state)
-        table: dict[str, str | None] = {o: None for o in state.get_registered_outcomes()}
+        table: dict[str, str | None] = dict.fromkeys(state._outcomes)
         table.update(given)
         previous = self._last_added_label
         if previous is not None:
@@ -156,9 +157,11 @@ class StateMachine(Container):
                 self._transitions[previous][outcome] = label
         self._states[label] = state
         self._transitions[label] = table
-        self._remappings[label] = dict(remapping or {})
-        self._constants[label] = dict(constants or {})
-        self._connector_outcomes = [o for o in connectors if given.get(o) is None]
+        self._remappings[label] = dict(remapping) if remapping else {}
+        self._constants[label] = dict(constants) if constants else {}
+        self._connector_outcomes = (
+            [o for o in connectors if given.get(o) is None] if connectors else []
+        )
         self._last_added_label = label
         if self._initial_state_label is None:
             self._initial_state_label = label
@@ -256,13 +259,13 @@ class StateMachine(Container):
                 else:
                     slot.next[outcome] = target
         self._slots = slots
+        assert self._initial_state_label is not None  # (checked before compiling)
+        self._first = slots[self._initial_state_label]
 
     # -- execution -------------------------------------------------------------------------------
     def _run(self) -> str | None:
         """The transition loop: run the current state, follow its outcome's transition."""
-        slots = self._slots
-        assert slots is not None and self._initial_state_label is not None
-        slot = slots[self._initial_state_label]
+        slot = self._first
         label = ""
         # With capture listeners only, the state_exited + transition of a step are held
         # until the next state is entered (nothing else happens in between in this
@@ -483,7 +486,7 @@ class StateMachine(Container):
 
     def __getstate__(self) -> dict[str, Any]:
         state = super().__getstate__()
-        for name in ("_preempt_lock", "_slots", "_current_slot", "_preempted_state"):
+        for name in ("_preempt_lock", "_slots", "_first", "_current_slot", "_preempted_state"):
             state.pop(name, None)
         return state
 
