@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from plan_bridge.errors import PlanBridgeError
-from plan_bridge.study.runs import RunSpec, failure_row, run_one
+from plan_bridge.study.runs import RunSpec, failure_row, pin_hash_seed, run_one
 
 __all__ = ["ClusterError", "DaskPool", "parse_cluster", "run_task"]
 
@@ -68,6 +68,7 @@ def run_task(spec: RunSpec, run_timeout: float) -> dict[str, Any]:
     """
     global _warmed
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    pin_hash_seed()  # before the first planner process starts in this worker
     get_worker: Any = importlib.import_module("distributed").get_worker
 
     if not _warmed:

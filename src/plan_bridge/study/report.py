@@ -198,15 +198,13 @@ def _num(value: Any, fmt: str) -> str:
 
 def _ranges(values: list[int]) -> str:
     """0,1,2,3,7 -> '0-3, 7'."""
-    parts: list[str] = []
+    spans: list[list[int]] = []
     for v in sorted(set(values)):
-        if parts and "-" not in parts[-1].lstrip("-") and int(parts[-1]) == v - 1:
-            parts[-1] = f"{parts[-1]}-{v}"
-        elif parts and "-" in parts[-1].lstrip("-") and int(parts[-1].rsplit("-", 1)[1]) == v - 1:
-            parts[-1] = f"{parts[-1].rsplit('-', 1)[0]}-{v}"
+        if spans and spans[-1][1] == v - 1:
+            spans[-1][1] = v
         else:
-            parts.append(str(v))
-    return ", ".join(parts)
+            spans.append([v, v])
+    return ", ".join(str(a) if a == b else f"{a}-{b}" for a, b in spans)
 
 
 def _setup_section(

@@ -1,10 +1,11 @@
 """The scripted-vs-planned study: run missions under approaches, fault rates and seeds.
 
 ``plan-bridge study TARGET... --runs N --fault-rates 0,0.1,0.2,0.4 --out DIR`` runs
-every (target, approach, fault rate, seed) in worker processes, appends one row per
+every (target, approach, fault rate, seed) in local worker processes (or, with
+``cluster=``, as Dask tasks: :mod:`plan_bridge.study.cluster`) and appends one row per
 finished run to ``DIR/results.csv`` (flushed and synced: a killed study continues
-where it stopped, and a run is never counted twice), then writes ``summary.csv``,
-``authoring.csv``, PNG plots and ``report.md``.
+where it stopped, and a run is never written twice). A row depends only on its
+:class:`RunSpec`, except the columns in :data:`VARYING_FIELDS` (timings, placement).
 
 Approaches: ``scripted`` (the domain's hand-written baseline), ``planned`` (the
 executive with the full recovery policy), the ablations ``no-replan``,
@@ -31,6 +32,7 @@ __all__ = [
     "VARYING_FIELDS",
     "RunSpec",
     "failure_row",
+    "pin_hash_seed",
     "read_results",
     "run_one",
     "run_study",
@@ -81,6 +83,16 @@ FIELDS = [
 ]
 #: Columns that may differ between two runs of the same spec; all others may not.
 VARYING_FIELDS = ("wall_time_s", "planning_time_s", "host", "worker")
+#: The hash seed of every process that runs the study's runs, and so of the planner
+#: processes they start: the planner process breaks ties between equally good plans in
+#: hash order (measured: pyperplan on fetch_drink picks another plan with another hash
+#: seed), so a run would otherwise depend on the process it ran in, not only its spec.
+HASH_SEED = "0"
+
+
+def pin_hash_seed() -> None:
+    """Give the planner processes this process starts from now on a fixed hash seed."""
+    os.environ["PYTHONHASHSEED"] = HASH_SEED
 
 
 @dataclass(frozen=True)
@@ -157,7 +169,11 @@ def _call_domain(fn: Any, task: Any, spec: RunSpec) -> Any:
 
 
 def run_one(spec: RunSpec) -> dict[str, Any]:
-    """Run one mission and measure it; never raises (errors become rows)."""
+    """Run one mission and measure it; never raises (errors become rows).
+
+    The row is a function of ``spec`` alone when the planner processes were started
+    after :func:`pin_hash_seed` (the study's workers do that first).
+    """
     row: dict[str, Any] = dict.fromkeys(FIELDS, "")
     key = spec.key
     row.update(
@@ -262,6 +278,7 @@ def _run(spec: RunSpec, clock: list[float]) -> dict[str, Any]:
 # -- the worker pool ----------------------------------------------------------------------------
 def _worker(tasks: Any, results: Any) -> None:
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    pin_hash_seed()
     from plan_bridge.planning.planner import get_planner
 
     # Start the planner's worker process now, so the first run is not charged for it.
