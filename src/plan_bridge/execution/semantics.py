@@ -9,8 +9,19 @@ a set of ground facts (closed world), and each ground action is cached.
 
 Supported: conjunction, disjunction, negation, implication, equivalence, equality of
 objects, existential and universal quantifiers, conditional and universally
-quantified effects. Numeric effects (``increase total-cost``) are ignored: they only
-carry plan costs. Numeric conditions are not supported and are reported as such.
+quantified effects; numeric fluents (``(battery ?r)``) in comparisons, arithmetic
+(+ - * /) and effects (assign, increase, decrease), read from and written to the
+numbers a state carries (:func:`~plan_bridge.execution.world.values_of`). A
+comparison with an undefined numeric value is false. ``total-cost`` is left out: it
+only carries plan costs.
+
+Durative actions are grounded too (:class:`GroundAction` ``.durative``): their at-start
+conditions are the action's preconditions, over-all conditions its invariant
+(:meth:`GroundAction.unmet_invariant`), at-end conditions are checked before the
+at-end effects (:meth:`GroundAction.unmet_at_end`); :meth:`GroundAction.start_effects`
+and :meth:`GroundAction.end_effects` are the two halves, and :meth:`GroundAction.effects`
+their composition (start, then end), which is what sequential simulation, plan
+checks and repair use.
 """
 
 from __future__ import annotations
@@ -21,6 +32,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from plan_bridge.errors import PlanBridgeError, UnsupportedFeatureError
+from plan_bridge.execution.world import FactSnapshot, values_of
 from plan_bridge.pddl.task import Fact, PlanningTask, format_fact
 from plan_bridge.planning.planner import PlanStep
 
@@ -30,6 +42,16 @@ Binding = Mapping[str, str]
 Facts = Collection[Fact]
 Condition = Callable[[Binding, Facts], bool]
 Term = Callable[[Binding], str]
+Value = Callable[[Binding, Facts], float]
+Values = dict[Fact, float]
+#: The metric's fluent: it only carries plan costs, the belief does not track it.
+COST_FLUENT = "total-cost"
+
+
+class _SimState(set[Fact]):
+    """A state being simulated: facts plus the numeric values (``values``)."""
+
+    values: Values
 
 
 def _type_name(up_type: Any) -> str:
@@ -71,7 +93,59 @@ class _Compiler:
             return lambda b: fact
         return lambda b: (name, *(t(b) for t in terms))
 
+    def number(self, node: Any) -> Value:
+        """A numeric expression; raises ``KeyError`` on an undefined fluent value."""
+        if node.is_int_constant() or node.is_real_constant():
+            constant = float(node.constant_value())
+            return lambda b, f: constant
+        if node.is_fluent_exp():
+            atom = self.atom(node)
+            return lambda b, f: values_of(f)[atom(b)]
+        operators: dict[str, Callable[[float, float], float]] = {
+            "is_plus": lambda x, y: x + y,
+            "is_minus": lambda x, y: x - y,
+            "is_times": lambda x, y: x * y,
+            "is_div": lambda x, y: x / y,
+        }
+        for test, operator in operators.items():
+            if getattr(node, test)():
+                parts = [self.number(a) for a in node.args]
+
+                def combined(
+                    b: Binding,
+                    f: Facts,
+                    parts: list[Value] = parts,
+                    op: Callable[[float, float], float] = operator,
+                ) -> float:
+                    value = parts[0](b, f)
+                    for part in parts[1:]:
+                        value = op(value, part(b, f))
+                    return value
+
+                return combined
+        raise UnsupportedFeatureError(
+            f"the numeric expression {node} is not supported by plan_bridge's executor",
+            feature="numeric expressions",
+        )
+
+    def comparison(self, node: Any, test: Callable[[float, float], bool]) -> Condition:
+        left, right = self.number(node.arg(0)), self.number(node.arg(1))
+
+        def compare(b: Binding, f: Facts) -> bool:
+            try:
+                return test(left(b, f), right(b, f))
+            except (KeyError, ZeroDivisionError):
+                return False  # an undefined value makes the comparison false
+
+        return compare
+
     def condition(self, node: Any) -> Condition:
+        if node.is_le():
+            return self.comparison(node, lambda x, y: x <= y)
+        if node.is_lt():
+            return self.comparison(node, lambda x, y: x < y)
+        if node.is_equals() and not node.arg(0).type.is_user_type():
+            return self.comparison(node, lambda x, y: abs(x - y) <= 1e-9)
         if node.is_bool_constant():
             value = bool(node.bool_constant_value())
             return lambda b, f: value
@@ -129,6 +203,26 @@ class _Compiler:
         if node.is_equals() and node.arg(0).type.is_user_type():
             lt, rt = self.term(node.arg(0)), self.term(node.arg(1))
             return lambda b: f"(= {lt(b)} {rt(b)})"
+        words = {"is_le": "<=", "is_lt": "<", "is_equals": "="}
+        for test, word in words.items():
+            if getattr(node, test)():
+                left, right = self.render_number(node.arg(0)), self.render_number(node.arg(1))
+                return lambda b: f"({word} {left(b)} {right(b)})"
+        text = str(node)
+        return lambda b: text
+
+    def render_number(self, node: Any) -> Callable[[Binding], str]:
+        if node.is_fluent_exp():
+            atom = self.atom(node)
+            return lambda b: format_fact(atom(b))
+        if node.is_int_constant() or node.is_real_constant():
+            text = f"{float(node.constant_value()):g}"
+            return lambda b: text
+        words = {"is_plus": "+", "is_minus": "-", "is_times": "*", "is_div": "/"}
+        for test, word in words.items():
+            if getattr(node, test)():
+                parts = [self.render_number(a) for a in node.args]
+                return lambda b: f"({word} {' '.join(p(b) for p in parts)})"
         text = str(node)
         return lambda b: text
 
@@ -150,13 +244,87 @@ class _Effect:
     forall: tuple[tuple[str, tuple[str, ...]], ...]
 
 
+@dataclass(frozen=True)
+class _NumericEffect:
+    atom: Callable[[Binding], Fact]
+    kind: str
+    """``assign``, ``increase`` or ``decrease``."""
+    value: Value
+    condition: Condition | None
+    forall: tuple[tuple[str, tuple[str, ...]], ...]
+
+
+Parts = tuple[tuple[Callable[[Binding], str], Condition], ...]
+
+
+@dataclass(frozen=True)
+class _Phase:
+    """The effects that happen at one time point of an action."""
+
+    effects: tuple[_Effect, ...] = ()
+    numeric: tuple[_NumericEffect, ...] = ()
+
+
 @dataclass
 class _LiftedAction:
     name: str
     parameters: tuple[str, ...]
-    precondition_parts: tuple[tuple[Callable[[Binding], str], Condition], ...]
+    precondition_parts: Parts
+    """For a durative action: its at-start conditions."""
     effects: tuple[_Effect, ...]
+    """Every boolean effect (both time points of a durative action)."""
     strips_preconditions: tuple[Callable[[Binding], Fact], ...] | None
+    phases: tuple[_Phase, ...] = ()
+    """One phase for an instantaneous action; start and end for a durative one."""
+    invariant_parts: Parts = ()
+    end_parts: Parts = ()
+    duration: tuple[Value, Value] | None = None
+
+
+def _bindings(
+    binding: Binding, forall: tuple[tuple[str, tuple[str, ...]], ...]
+) -> Iterable[Binding]:
+    if not forall:
+        return (binding,)
+    names = [n for n, _ in forall]
+    return (
+        {**binding, **dict(zip(names, combo, strict=True))}
+        for combo in itertools.product(*(objs for _, objs in forall))
+    )
+
+
+def _phase_effects(
+    phase: _Phase, binding: Binding, facts: Facts
+) -> tuple[set[Fact], set[Fact], Values]:
+    """(added, deleted, new numeric values) of one phase applied in ``facts``."""
+    adds: set[Fact] = set()
+    dels: set[Fact] = set()
+    for effect in phase.effects:
+        for b in _bindings(binding, effect.forall):
+            if effect.condition is None or effect.condition(b, facts):
+                (adds if effect.add else dels).add(effect.atom(b))
+    values: Values = {}
+    if phase.numeric:
+        current = values_of(facts)
+        for numeric in phase.numeric:
+            for b in _bindings(binding, numeric.forall):
+                if numeric.condition is not None and not numeric.condition(b, facts):
+                    continue
+                atom = numeric.atom(b)
+                try:
+                    amount = numeric.value(b, facts)
+                    if numeric.kind == "assign":
+                        values[atom] = amount
+                    else:
+                        old = values.get(atom, current[atom])
+                        values[atom] = old + amount if numeric.kind == "increase" else old - amount
+                except (KeyError, ZeroDivisionError):
+                    continue  # an undefined value stays undefined
+    return adds, dels, values
+
+
+def _after(facts: Facts, adds: set[Fact], dels: set[Fact], values: Values) -> FactSnapshot:
+    return FactSnapshot((set(facts) - dels) | adds, {**values_of(facts), **values})
 
 
 @dataclass
@@ -180,7 +348,13 @@ class GroundAction:
         """Parameter name -> object name."""
         return dict(self._binding)
 
+    @property
+    def durative(self) -> bool:
+        """Whether this is a durative action (start and end effects, an invariant)."""
+        return self._lifted.duration is not None
+
     def applicable(self, facts: Facts) -> bool:
+        """Whether the preconditions (at-start conditions) hold in ``facts``."""
         b = self._binding
         return all(cond(b, facts) for _, cond in self._lifted.precondition_parts)
 
@@ -189,29 +363,55 @@ class GroundAction:
         b = self._binding
         return [text(b) for text, cond in self._lifted.precondition_parts if not cond(b, facts)]
 
+    def unmet_invariant(self, facts: Facts) -> list[str]:
+        """The over-all conditions of a durative action that do not hold in ``facts``."""
+        b = self._binding
+        return [text(b) for text, cond in self._lifted.invariant_parts if not cond(b, facts)]
+
+    def unmet_at_end(self, facts: Facts) -> list[str]:
+        """The at-end conditions of a durative action that do not hold in ``facts``."""
+        b = self._binding
+        return [text(b) for text, cond in self._lifted.end_parts if not cond(b, facts)]
+
+    def duration_bounds(self, facts: Facts) -> tuple[float, float] | None:
+        """(lower, upper) duration in ``facts`` (None: not durative, or undefined)."""
+        bounds = self._lifted.duration
+        if bounds is None:
+            return None
+        try:
+            return bounds[0](self._binding, facts), bounds[1](self._binding, facts)
+        except (KeyError, ZeroDivisionError):
+            return None
+
+    def start_effects(self, facts: Facts) -> tuple[set[Fact], set[Fact], Values]:
+        """(added, deleted, numeric values) at the start (all effects if instantaneous)."""
+        return _phase_effects(self._lifted.phases[0], self._binding, facts)
+
+    def end_effects(self, facts: Facts) -> tuple[set[Fact], set[Fact], Values]:
+        """(added, deleted, numeric values) at the end of a durative action, applied in
+        ``facts`` (the state when it ends); nothing for an instantaneous one."""
+        if len(self._lifted.phases) < 2:
+            return set(), set(), {}
+        return _phase_effects(self._lifted.phases[1], self._binding, facts)
+
+    def all_effects(self, facts: Facts) -> tuple[set[Fact], set[Fact], Values]:
+        """(added, deleted, values) of the whole action (start then end) in ``facts``."""
+        adds, dels, values = self.start_effects(facts)
+        if len(self._lifted.phases) < 2:
+            return adds, dels, values
+        middle = _after(facts, adds, dels, values)
+        end_adds, end_dels, end_values = self.end_effects(middle)
+        return (adds - end_dels) | end_adds, dels | end_dels, {**values, **end_values}
+
     def effects(self, facts: Facts) -> tuple[set[Fact], set[Fact]]:
         """(added, deleted) facts when applied in ``facts`` (conditions read ``facts``)."""
-        adds: set[Fact] = set()
-        dels: set[Fact] = set()
-        for effect in self._lifted.effects:
-            bindings: Iterable[Binding]
-            if effect.forall:
-                names = [n for n, _ in effect.forall]
-                bindings = (
-                    {**self._binding, **dict(zip(names, combo, strict=True))}
-                    for combo in itertools.product(*(objs for _, objs in effect.forall))
-                )
-            else:
-                bindings = (self._binding,)
-            for b in bindings:
-                if effect.condition is None or effect.condition(b, facts):
-                    (adds if effect.add else dels).add(effect.atom(b))
+        adds, dels, _ = self.all_effects(facts)
         return adds, dels
 
     def apply(self, facts: Facts) -> frozenset[Fact]:
         """The state after this action (PDDL semantics: deletes first, then adds)."""
-        adds, dels = self.effects(facts)
-        return frozenset((set(facts) - dels) | adds)
+        adds, dels, values = self.all_effects(facts)
+        return _after(facts, adds, dels, values)
 
     def precondition_atoms(self) -> frozenset[Fact] | None:
         """The positive atoms of a STRIPS precondition; None if not STRIPS."""
@@ -250,6 +450,31 @@ class PlanCheck:
         return "valid"
 
 
+def _timed_conditions(action: Any) -> tuple[list[Any], list[Any], list[Any]]:
+    """A durative action's conditions: (at start, over all, at end)."""
+    at_start: list[Any] = []
+    over_all: list[Any] = []
+    at_end: list[Any] = []
+    for interval, conditions in action.conditions.items():
+        lower, upper = interval.lower, interval.upper
+        if lower.is_from_start() and upper.is_from_start() and lower.delay == upper.delay == 0:
+            at_start.extend(conditions)
+        elif lower.is_from_end() and upper.is_from_end():
+            at_end.extend(conditions)
+        else:
+            over_all.extend(conditions)
+    return at_start, over_all, at_end
+
+
+def _timed_effects(action: Any) -> tuple[list[Any], list[Any]]:
+    """A durative action's effects: (at start, at end)."""
+    start: list[Any] = []
+    end: list[Any] = []
+    for timing, effects in action.effects.items():
+        (end if timing.is_from_end() else start).extend(effects)
+    return start, end
+
+
 class ActionModel:
     """The actions of a task, compiled once; ground actions are cached."""
 
@@ -270,30 +495,82 @@ class ActionModel:
                 f"unknown action {name!r}; actions: {', '.join(sorted(self.task.actions))}"
             ) from exc
         c = self._compiler
+        durative = hasattr(action, "duration")
+        if durative:
+            at_start, over_all, at_end = _timed_conditions(action)
+            start_effects, end_effects = _timed_effects(action)
+        else:
+            at_start, over_all, at_end = list(action.preconditions), [], []
+            start_effects, end_effects = list(action.effects), []
+        parts, strips = self._parts(at_start)
+        phases = [self._phase(name, start_effects)]
+        if durative:
+            phases.append(self._phase(name, end_effects))
+        duration = None
+        if durative:
+            duration = (c.number(action.duration.lower), c.number(action.duration.upper))
+        lifted = _LiftedAction(
+            name=name,
+            parameters=tuple(p.name for p in action.parameters),
+            precondition_parts=parts,
+            effects=tuple(e for phase in phases for e in phase.effects),
+            strips_preconditions=strips,
+            phases=tuple(phases),
+            invariant_parts=self._parts(over_all)[0],
+            end_parts=self._parts(at_end)[0],
+            duration=duration,
+        )
+        self._lifted[name] = lifted
+        return lifted
+
+    def _parts(
+        self, conditions: Iterable[Any]
+    ) -> tuple[Parts, tuple[Callable[[Binding], Fact], ...] | None]:
+        """Conjuncts as (text, condition), and their atoms if all are positive atoms
+        (a STRIPS precondition; None otherwise)."""
+        c = self._compiler
         parts: list[tuple[Callable[[Binding], str], Condition]] = []
-        strips: list[Callable[[Binding], Fact]] | None = []
-        for pre in action.preconditions:
-            conjuncts = pre.args if pre.is_and() else [pre]
-            for conjunct in conjuncts:
+        atoms: list[Callable[[Binding], Fact]] | None = []
+        for pre in conditions:
+            for conjunct in pre.args if pre.is_and() else [pre]:
                 parts.append((c.render(conjunct), c.condition(conjunct)))
-                if strips is not None:
+                if atoms is not None:
                     if conjunct.is_fluent_exp() and conjunct.type.is_bool_type():
-                        strips.append(c.atom(conjunct))
+                        atoms.append(c.atom(conjunct))
                     else:
-                        strips = None
-        effects = []
-        for effect in action.effects:
+                        atoms = None
+        return tuple(parts), None if atoms is None else tuple(atoms)
+
+    def _phase(self, name: str, effects: Iterable[Any]) -> _Phase:
+        c = self._compiler
+        booleans: list[_Effect] = []
+        numbers: list[_NumericEffect] = []
+        for effect in effects:
+            condition = c.condition(effect.condition) if effect.is_conditional() else None
+            forall = tuple((v.name, c.objects(v.type)) for v in effect.forall)
             if not effect.fluent.type.is_bool_type():
-                continue  # numeric effects only carry costs
+                if effect.fluent.fluent().name.lower() == COST_FLUENT:
+                    continue
+                kind = (
+                    "increase"
+                    if effect.is_increase()
+                    else "decrease"
+                    if effect.is_decrease()
+                    else "assign"
+                )
+                numbers.append(
+                    _NumericEffect(
+                        c.atom(effect.fluent), kind, c.number(effect.value), condition, forall
+                    )
+                )
+                continue
             value = effect.value
             if not value.is_bool_constant():
                 raise UnsupportedFeatureError(
                     f"action {name}: effect {effect} assigns a computed value",
                     feature="non-constant boolean effects",
                 )
-            condition = c.condition(effect.condition) if effect.is_conditional() else None
-            forall = tuple((v.name, c.objects(v.type)) for v in effect.forall)
-            effects.append(
+            booleans.append(
                 _Effect(
                     c.atom(effect.fluent),
                     bool(value.bool_constant_value()),
@@ -302,15 +579,17 @@ class ActionModel:
                     forall,
                 )
             )
-        lifted = _LiftedAction(
-            name=name,
-            parameters=tuple(p.name for p in action.parameters),
-            precondition_parts=tuple(parts),
-            effects=tuple(effects),
-            strips_preconditions=tuple(strips) if strips is not None else None,
-        )
-        self._lifted[name] = lifted
-        return lifted
+        return _Phase(tuple(booleans), tuple(numbers))
+
+    def initial_values(self) -> dict[Fact, float]:
+        """The numeric atoms' values in the task's initial state (``total-cost`` aside)."""
+        values: dict[Fact, float] = {}
+        for fluent_exp, value in self.task.problem.explicit_initial_values.items():
+            if fluent_exp.type.is_bool_type() or fluent_exp.fluent().name == COST_FLUENT:
+                continue
+            if value.is_int_constant() or value.is_real_constant():
+                values[self._compiler.atom(fluent_exp)({})] = float(value.constant_value())
+        return values
 
     def ground(self, step: PlanStep) -> GroundAction:
         key = (step.action, step.arguments)
@@ -355,17 +634,19 @@ class ActionModel:
 
     def check_plan(self, steps: Sequence[PlanStep], facts: Facts) -> PlanCheck:
         """Simulate ``steps`` from ``facts``: does every step apply and the goal hold?"""
-        state = set(facts)  # one copy, updated in place: plans can be long, states big
+        state = _SimState(facts)  # one copy, updated in place: plans can be long, states big
+        state.values = dict(values_of(facts))
         for index, step in enumerate(steps):
             ground = self.ground(step)
             if not ground.applicable(state):
                 unmet = tuple(ground.unmet_preconditions(state))
-                return PlanCheck(False, frozenset(state), index, unmet)
-            adds, dels = ground.effects(state)
+                return PlanCheck(False, FactSnapshot(state, state.values), index, unmet)
+            adds, dels, values = ground.all_effects(state)
             state -= dels
             state |= adds
+            state.values.update(values)
         reached = self.goal_holds(state)
-        return PlanCheck(reached, frozenset(state), None, (), reached)
+        return PlanCheck(reached, FactSnapshot(state, state.values), None, (), reached)
 
     def regress(self, steps: Sequence[PlanStep]) -> frozenset[Fact] | None:
         """Atoms that must hold before ``steps`` for them to reach the goal (STRIPS only).
@@ -379,8 +660,10 @@ class ActionModel:
         for step in reversed(steps):
             ground = self.ground(step)
             pre = ground.precondition_atoms()
-            if pre is None or any(
-                e.condition is not None or e.forall for e in ground._lifted.effects
+            if (
+                pre is None
+                or ground.durative
+                or any(e.condition is not None or e.forall for e in ground._lifted.effects)
             ):
                 return None
             adds = {e.atom(ground._binding) for e in ground._lifted.effects if e.add}

@@ -4,6 +4,11 @@ Skills change it in two ways: a succeeded skill's action effects are applied, an
 any skill may report observations (facts it saw to be true or false), which override
 what was believed. An optional sensing port refreshes facts from outside. Steps of a
 Concurrence update it from several threads, hence the lock.
+
+Numeric fluents (``(battery r1)``) are part of the belief too: :attr:`WorldState.values`
+maps ground numeric atoms to numbers. Snapshots (:attr:`WorldState.facts`) are
+:class:`FactSnapshot` frozensets that carry those values along, so everything that
+reads a state (conditions, the planner's initial state for a replan) sees them.
 """
 
 from __future__ import annotations
@@ -15,9 +20,35 @@ from typing import Any
 
 from plan_bridge.pddl.task import Fact, FactLike, parse_fact
 
-__all__ = ["Observation", "WorldState", "normalise_observations"]
+__all__ = ["FactSnapshot", "Observation", "WorldState", "normalise_observations", "values_of"]
 
 Observation = tuple[Fact, bool]
+_NO_VALUES: Mapping[Fact, float] = {}
+
+
+class FactSnapshot(frozenset[Fact]):
+    """The true facts at one moment, with the numeric atoms' values (``values``)."""
+
+    values: Mapping[Fact, float]
+
+    def __new__(
+        cls, facts: Iterable[Fact] = (), values: Mapping[Fact, float] | None = None
+    ) -> FactSnapshot:
+        snapshot = super().__new__(cls, facts)
+        snapshot.values = dict(values or {})
+        return snapshot
+
+
+class _LiveFacts(set[Fact]):
+    """The belief's live set of facts; ``values`` holds the numeric atoms."""
+
+    values: dict[Fact, float]
+
+
+def values_of(facts: object) -> Mapping[Fact, float]:
+    """The numeric values a state carries (empty for a plain set of facts)."""
+    values = getattr(facts, "values", None)
+    return values if isinstance(values, Mapping) else _NO_VALUES
 
 
 def normalise_observations(value: Any) -> list[Observation]:
@@ -46,16 +77,33 @@ def normalise_observations(value: Any) -> list[Observation]:
 class WorldState:
     """A thread-safe set of true ground facts (closed world: absent means false)."""
 
-    def __init__(self, facts: Iterable[FactLike] = ()) -> None:
-        self._facts: set[Fact] = {parse_fact(f) for f in facts}
+    def __init__(
+        self, facts: Iterable[FactLike] = (), values: Mapping[Fact, float] | None = None
+    ) -> None:
+        self._facts = _LiveFacts(parse_fact(f) for f in facts)
+        self._facts.values = dict(values if values is not None else values_of(facts))
         self._lock = threading.Lock()
         self.version = 0
 
     @property
-    def facts(self) -> frozenset[Fact]:
-        """A snapshot of the true facts."""
+    def facts(self) -> FactSnapshot:
+        """A snapshot of the true facts (and of the numeric values)."""
         with self._lock:
-            return frozenset(self._facts)
+            return FactSnapshot(self._facts, self._facts.values)
+
+    @property
+    def values(self) -> dict[Fact, float]:
+        """A copy of the numeric atoms' values."""
+        with self._lock:
+            return dict(self._facts.values)
+
+    def set_values(self, values: Mapping[Fact, float]) -> None:
+        """Set numeric atoms (numeric effects, or a sensed battery level)."""
+        if not values:
+            return
+        with self._lock:
+            self._facts.values.update(values)
+            self.version += 1
 
     @contextlib.contextmanager
     def locked(self) -> Iterator[set[Fact]]:
@@ -88,9 +136,14 @@ class WorldState:
                 self.version += 1
         return changed
 
-    def replace(self, facts: Iterable[Fact]) -> None:
+    def replace(self, facts: Iterable[Fact], values: Mapping[Fact, float] | None = None) -> None:
+        """Believe exactly ``facts``; numeric values are replaced when ``values`` is
+        given or ``facts`` carries them, else kept."""
+        given = values if values is not None else values_of(facts)
         with self._lock:
-            self._facts = set(facts)
+            kept = self._facts.values
+            self._facts = _LiveFacts(facts)
+            self._facts.values = dict(given) if given or values is not None else kept
             self.version += 1
 
     def __contains__(self, fact: object) -> bool:
