@@ -212,3 +212,22 @@ def test_an_unreachable_scheduler_is_a_clear_error(
     monkeypatch.setattr("plan_bridge.study.cluster.CONNECT_TIMEOUT", 2.0)
     with pytest.raises(ClusterError, match="cannot reach a Dask scheduler"):
         run_study(specs(range(1)), tmp_path, cluster=f"tcp://127.0.0.1:{free_port()}")
+
+
+SLEEPY = str(Path(__file__).parents[1] / "data" / "sleepy")
+
+
+@pytest.mark.timeout(180)
+def test_a_run_that_hangs_on_a_worker_is_recorded_as_timeout_and_the_others_finish(
+    cluster: Cluster, tmp_path: Path
+) -> None:
+    hangs = RunSpec(SLEEPY, "planned", 1.0, 0)
+    others = [RunSpec(SLEEPY, "planned", 0.0, s) for s in range(3)]
+    rows = run_study([hangs, *others], tmp_path, cluster=cluster.address, run_timeout=15.0)
+    outcome = {r["seed"] + "@" + r["fault_rate"]: r["outcome"] for r in rows}
+    assert outcome == {"0@1": "timeout", "0@0": "succeeded", "1@0": "succeeded", "2@0": "succeeded"}
+    assert "exceeded 15 s" in next(r["error"] for r in rows if r["outcome"] == "timeout")
+    # The worker with the stuck thread was restarted by its nanny: a new worker process
+    # (new address) took its place.
+    stuck = next(r["worker"] for r in rows if r["outcome"] == "timeout")
+    assert stuck not in cluster.wait_for_workers(2).values()

@@ -1,0 +1,7 @@
+(define (problem deliver-cup)
+  (:domain rooms)
+  (:objects robot1 - robot hall kitchen office - room cup - item)
+  (:init (at robot1 hall) (free robot1) (item-at cup kitchen)
+         (connected hall kitchen) (connected kitchen hall) (connected hall office) (connected office hall)
+         (open hall kitchen) (open kitchen hall) (open hall office) (open office hall))
+  (:goal (and (item-at cup office))))
