@@ -145,6 +145,7 @@ class Config:
     preempt_trials: int
     peer_py_trees: int
     peer_transitions: int
+    compare_trials: int  # rounds per logging configuration against the original
 
 
 FULL = Config(
@@ -159,6 +160,7 @@ FULL = Config(
     preempt_trials=200,
     peer_py_trees=1000,
     peer_transitions=10_000,
+    compare_trials=9,
 )
 QUICK = Config(
     quick=True,
@@ -172,6 +174,7 @@ QUICK = Config(
     preempt_trials=15,
     peer_py_trees=200,
     peer_transitions=1_000,
+    compare_trials=3,
 )
 
 

@@ -23,6 +23,7 @@ and in two modes: ``repeated`` (one machine executed again and again) and ``firs
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import gc
 import importlib
 import math
@@ -286,7 +287,8 @@ class FirstRun:
         t0 = time.perf_counter()
         run()
         once = max(time.perf_counter() - t0, 1e-7)
-        self.reps = max(1, min(200, math.ceil(cfg.min_trial_s / once)))
+        # At most 25 fresh machines a sample: building them (untimed) is the slow part.
+        self.reps = max(1, min(25, math.ceil(cfg.min_trial_s / once)))
 
     def trial(self) -> float:
         runs = [self.build() for _ in range(self.reps)]
@@ -305,14 +307,11 @@ class FirstRun:
 class Build(FirstRun):
     """Building a machine (construction and ``close()``), per state."""
 
-    def __init__(self, name: str, what: str, build: Callable[[], Runner], units: int) -> None:
-        super().__init__(name, what, build, units)
-
     def prepare(self, cfg: Any) -> None:
         t0 = time.perf_counter()
         self.build()
         once = max(time.perf_counter() - t0, 1e-7)
-        self.reps = max(1, min(200, math.ceil(cfg.min_trial_s / once)))
+        self.reps = max(1, min(5, math.ceil(cfg.min_trial_s / once)))
 
     def trial(self) -> float:
         gc.collect()
@@ -340,6 +339,7 @@ def compare(
     Result names are ``scenario/mode/impl`` (impl: ``ours`` or ``original``).
     """
     out: dict[str, dict[str, Any]] = {}
+    cfg = dataclasses.replace(cfg, trials=cfg.compare_trials)
     for config in CONFIGS:
         benches: list[Any] = []
         with logging_config(config, ours, original):

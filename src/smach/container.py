@@ -442,6 +442,41 @@ class Container(ContainerEvents, State):
                 bus.preempt_seen = False
                 self._clear_preempt()
 
+    def _step(self, label: str, state: State, ud: UserData, thread: str | None = None) -> str:
+        """Run one child once, as every container does (StateMachine inlines it).
+
+        A pending preempt request is forwarded first; runtime control (``bus.control``)
+        may hold the child before it starts and replace its outcome after; the
+        entered/exited events or log lines go out; an exception is wrapped with the
+        child's path; an undeclared outcome is refused.
+        """
+        if self._preempt_requested:
+            state.request_preempt()
+        control = self._bus.control  # runtime control (smach.control): None unless attached
+        path = state._path
+        if control is not None:
+            control.enter(self, path, state)  # holds the child while paused
+        observed = self._bus.listeners or self._local
+        if observed:
+            self._emit_entered(label, thread)  # (and the log line, if wanted)
+        elif self._log_info:
+            self._log_entered(label)
+        try:
+            outcome = state.execute(ud)
+        except Exception as exc:
+            if control is not None:
+                control.leave(path, state, None)
+            raise self._child_error(label, state, exc) from exc
+        if control is not None:
+            outcome = control.leave(path, state, outcome)
+        if outcome not in state._outcomes:
+            raise self._bad_outcome(label, state, outcome)
+        if observed:
+            self._emit_exited(label, outcome, thread)
+        elif self._log_info:
+            self._log_exited(label, outcome)
+        return outcome
+
     def _child_error(self, label: str, state: State, exc: Exception) -> InvalidUserCodeError:
         """Wrap an exception raised by a child's execute(), naming the child's path.
 

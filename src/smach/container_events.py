@@ -35,7 +35,6 @@ from smach.introspection.events import (
     StateExited,
     Transition,
     event_of,
-    stamp,
 )
 from smach.user_data import UserData
 
@@ -225,13 +224,4 @@ class ContainerEvents:
 
     def _emit_error(self, exc: BaseException) -> None:
         if self._bus.listeners:
-            t, thread = stamp()
-            self._bus.emit(
-                ErrorRaised(
-                    path=self._path,
-                    time=t,
-                    thread=thread,
-                    error_type=type(exc).__name__,
-                    message=str(exc),
-                )
-            )
+            self._send(ErrorRaised, self._path, None, type(exc).__name__, str(exc))

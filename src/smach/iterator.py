@@ -49,7 +49,6 @@ class Iterator(Container):
         self._remapper_cache: Remapper | None = None
         self._loops: frozenset[str] = frozenset()
         self._breaks: frozenset[str] = frozenset()
-        self._registered: frozenset[str] = frozenset()
         self._index = 0
 
     # -- construction ----------------------------------------------------------------------------
@@ -125,7 +124,6 @@ class Iterator(Container):
         self._remapper_cache = self._remapper(label, state, self._remapping)
         self._loops = frozenset(self._loop_outcomes)
         self._breaks = frozenset(self._break_outcomes)
-        self._registered = frozenset(state.get_registered_outcomes())
 
     # -- execution -------------------------------------------------------------------------------
     def _run(self) -> str | None:
@@ -140,12 +138,11 @@ class Iterator(Container):
                 f"{self._path}: the items to iterate are not iterable: {items!r}"
             ) from exc
         outcome: str | None = self._exhausted_outcome
-        loops, breaks, registered = self._loops, self._breaks, self._registered
+        loops, breaks = self._loops, self._breaks
         data = self._userdata._data
         it_label = self._items_label
         bus = self._bus
         thread = self._thread
-        log = self._log_info
         self._index = 0
         preempted = False
         while True:
@@ -162,28 +159,7 @@ class Iterator(Container):
                     f"item {self._index}: {exc}"
                 ) from exc
             data[it_label] = item
-            if self._preempt_requested:
-                state.request_preempt()
-            control = bus.control  # runtime control (smach.control): None unless attached
-            if control is not None:
-                control.enter(self, state._path, state)
-            observed = bus.listeners or self._local
-            if observed:
-                self._emit_entered(label, thread)  # (and the log line, if wanted)
-            elif log:
-                self._log_entered(label)
-            try:
-                outcome = state.execute(remapper)
-            except Exception as exc:
-                if control is not None:
-                    control.leave(state._path, state, None)
-                raise self._child_error(label, state, exc) from exc
-            if control is not None:
-                outcome = control.leave(state._path, state, outcome)
-            if outcome not in registered:
-                raise self._bad_outcome(label, state, outcome)
-            if observed:
-                self._emit_exited(label, outcome, thread)
+            outcome = self._step(label, state, remapper, thread)
             self._index += 1
             if self._preempt_requested and not state._preempt_requested:
                 # The child serviced our request: stop here. (If it ignored the
@@ -193,7 +169,7 @@ class Iterator(Container):
                 break
             if outcome in breaks or (loops and outcome not in loops):
                 break
-            if observed:
+            if bus.listeners or self._local:
                 self._emit_transition(label, outcome, label, thread)
         assert outcome is not None
         final = self._final_outcome_map.get(outcome, outcome)

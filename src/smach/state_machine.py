@@ -313,19 +313,10 @@ class StateMachine(Container):
                     else:  # capture listeners only (journal, viewer): _emit_entered inlined
                         capture = (StateEntered, slot.path, _monotonic(), thread, label)
                         if held is None:
-                            for sink in bus.sinks:
-                                try:
-                                    sink(capture)
-                                except Exception as exc:
-                                    bus.sink_failed(sink, exc)
+                            bus.capture(capture)
                         else:
-                            step = (held, held_move, capture)
+                            self._release((held, held_move, capture))
                             held = None
-                            for batch_sink in bus.batch_sinks:
-                                try:
-                                    batch_sink(step)
-                                except Exception as exc:
-                                    bus.sink_failed(batch_sink, exc)
                 try:
                     # Typed str: anything else fails the lookup below and is reported.
                     outcome: str = slot.state.execute(slot.remapper)  # type: ignore[assignment]
@@ -395,8 +386,8 @@ class StateMachine(Container):
     def _terminal_states(self) -> list[str]:
         return [self._last_label]
 
-    def _release(self, held: tuple[Capture, Capture]) -> None:
-        """Send a held state_exited + transition pair to the capture listeners."""
+    def _release(self, held: tuple[Capture, ...]) -> None:
+        """Send held captures (state_exited + transition [+ state_entered]) in one call."""
         bus = self._bus
         for sink in bus.batch_sinks:
             try:

@@ -104,27 +104,7 @@ class Wrapper(Container):
         """Run the child once: events, exception wrapping and outcome checks included."""
         child, label, remapper = self._child, self._label, self._remapper_cache
         assert child is not None and label is not None and remapper is not None
-        if self._preempt_requested:
-            child.request_preempt()
-        control = self._bus.control  # runtime control (smach.control): None unless attached
-        if control is not None:
-            control.enter(self, child._path, child)
-        observed = self._observed()
-        if observed:
-            self._emit_entered(label)
-        try:
-            outcome = child.execute(remapper)
-        except Exception as exc:
-            if control is not None:
-                control.leave(child._path, child, None)
-            raise self._child_error(label, child, exc) from exc
-        if control is not None:
-            outcome = control.leave(child._path, child, outcome)
-        if outcome not in child._outcomes:
-            raise self._bad_outcome(label, child, outcome)
-        if observed:
-            self._emit_exited(label, outcome)
-        return outcome
+        return self._step(label, child, remapper)
 
     def _compile(self) -> None:
         assert self._child is not None and self._label is not None
