@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 
 from smach.introspection.structure import StateNode
 
-__all__ = ["EdgeShape", "Layout", "Shape", "layout", "text_width"]
+__all__ = ["EdgeShape", "Layout", "Shape", "label_box", "layout", "off_path", "text_width"]
 
 FONT_SIZE = 12.0
 SMALL_FONT = 10.0
@@ -349,6 +349,7 @@ def _container(node: StateNode, collapsed: Collection[str], depth: int) -> _Bloc
         edges.append(
             EdgeShape(node.path, edge.source, edge.outcome, edge.target, edge.terminal, d, lx, ly)
         )
+    _separate_labels(edges, len(edges) - sum(1 for e in edges if e.container == node.path))
     # Back edges may bulge out on the right: make room.
     extra = 0.0
     for e in edges:
@@ -360,6 +361,52 @@ def _container(node: StateNode, collapsed: Collection[str], depth: int) -> _Bloc
         w += extra
         box.w = w
     return _Block(w, h, shapes, edges, pills, box)
+
+
+LABEL_H = 13.0
+"""Height of an edge label's box (10 px text and its white halo)."""
+
+
+def label_box(edge: EdgeShape) -> tuple[float, float, float, float]:
+    """(left, top, right, bottom) of the label of ``edge`` (drawn centred on its point)."""
+    half = (text_width(edge.outcome, SMALL_FONT) + 6) / 2
+    return (
+        edge.label_x - half,
+        edge.label_y - LABEL_H / 2,
+        edge.label_x + half,
+        edge.label_y + LABEL_H / 2,
+    )
+
+
+def _overlap(a: tuple[float, float, float, float], b: tuple[float, float, float, float]) -> bool:
+    return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]
+
+
+def _separate_labels(edges: list[EdgeShape], first: int) -> None:
+    """Move the labels of ``edges[first:]`` (this container's) off every label before them.
+
+    Each label keeps its place if it is free, else takes the nearest free place along
+    its edge's direction (below or above first, then beside), so no two labels overlap.
+    """
+    placed = [label_box(e) for e in edges[:first]]
+    for edge in edges[first:]:
+        box = label_box(edge)
+        if any(_overlap(box, other) for other in placed):
+            width = box[2] - box[0]
+            step = LABEL_H + 1
+            candidates = [
+                (dx * (width + 4), dy * step)
+                for ring in range(1, 9)
+                for dx, dy in ((0, ring), (0, -ring), (ring, 0), (-ring, 0), (ring, ring))
+            ]
+            for dx, dy in candidates:
+                moved = (box[0] + dx, box[1] + dy, box[2] + dx, box[3] + dy)
+                if not any(_overlap(moved, other) for other in placed):
+                    edge.label_x += dx
+                    edge.label_y += dy
+                    box = moved
+                    break
+        placed.append(box)
 
 
 def _lane(
@@ -478,6 +525,28 @@ def _block(node: StateNode, collapsed: Collection[str], depth: int) -> _Block:
     if depth > 0 and node.path in collapsed:
         return _leaf(node, depth, True)
     return _container(node, collapsed, depth)
+
+
+def off_path(root: StateNode, active: Collection[str]) -> list[str]:
+    """The containers to collapse so that the ``active`` paths stand out: every
+    container two or more levels below ``root`` that holds none of them.
+
+    The root and its children stay open (the overall shape of the machine: a plan's
+    chain of steps); below them only the path to what runs is open. The page's default
+    view; with nothing active, an overview.
+    """
+    on_path = set()
+    for path in active:
+        prefix = path
+        while prefix:
+            on_path.add(prefix)
+            prefix = prefix.rsplit("/", 1)[0]
+    shallow = {root.path, *(child.path for child in root.children)}
+    return [
+        node.path
+        for node in root.walk()
+        if node.is_container and node.path not in shallow and node.path not in on_path
+    ]
 
 
 def layout(root: StateNode, collapsed: Collection[str] = ()) -> Layout:

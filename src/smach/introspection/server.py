@@ -329,6 +329,7 @@ class _Handler(BaseHTTPRequestHandler):
         self._json(self.server_viewer.view_json(at))
 
     def _svg(self, query: dict[str, str], raw: str) -> None:
+        from smach.introspection.layout import off_path
         from smach.introspection.svg import render_svg
 
         root = self.server_viewer.structure(_int(query.get("version")))
@@ -339,7 +340,10 @@ class _Handler(BaseHTTPRequestHandler):
                 "image/svg+xml",
             )
             return
-        collapsed = [c for c in parse_qs(raw).get("c", []) if c]
+        params = parse_qs(raw)
+        collapsed = [c for c in params.get("c", []) if c]
+        if params.get("focus"):  # the page's default: what is off the active path, collapsed
+            collapsed.extend(off_path(root, params.get("a", [])))
         text = render_svg(root, collapsed=collapsed, standalone=False)
         self._send(text.encode("utf-8"), "image/svg+xml")
 

@@ -6,6 +6,7 @@ artifacts/viewer/ (gitignored) for people to look at.
 
 from __future__ import annotations
 
+import itertools
 import shutil
 import threading
 from collections.abc import Iterator
@@ -204,6 +205,10 @@ def test_big_graph_shows_every_state_and_collapses_containers(open_page: Any) ->
     assert sum(1 for _ in tree.walk()) > 50
     with serve(sm, quiet=True, interval=0.02) as viewer:
         page = open_page(viewer.url, 1600, 1000)
+        # The default view: the root and its children open, deeper containers boxed.
+        assert page.locator("#graph .node.collapsed").count() >= 1
+        page.click("#expand-all")
+        page.wait_for_selector("#graph .node.collapsed", state="detached")
         drawn = set(
             page.eval_on_selector_all("#graph [data-path]", "els => els.map(e => e.dataset.path)")
         )
@@ -254,3 +259,57 @@ def test_planned_mission_shows_plans_replans_and_step_status(
         page.wait_for_selector("#plan-columns .plancol >> nth=1")
         assert page.locator("#plan-columns .plancol").count() == 2
         shot(page, "plan-replay")
+
+
+def label_boxes(page: Any, selector: str) -> list[dict[str, float]]:
+    boxes: list[dict[str, float]] = page.eval_on_selector_all(
+        selector,
+        "els => els.map(e => { const r = e.getBoundingClientRect();"
+        " return {x: r.x, y: r.y, w: r.width, h: r.height}; })",
+    )
+    return boxes
+
+
+@pytest.mark.timeout(180)
+def test_a_mission_replay_is_readable_at_every_step_by_default(
+    open_page: Any, tmp_path: Path
+) -> None:
+    """Fitted to the window, the running step is open and large, the rest of the plan is
+    boxed, the edge labels do not overlap, and what runs is highlighted."""
+    pytest.importorskip("unified_planning")
+    from plan_bridge.cli import main
+
+    domains = Path(__file__).parents[3] / "domains"
+    journal_path = tmp_path / "mission.jsonl"
+    main(["run", str(domains / "table_clearing"), "--seed", "1", "--journal", str(journal_path),
+          "--quiet"])  # fmt: skip
+    _, records = read_journal(journal_path)
+    with serve(JournalSource(journal_path), quiet=True) as replay:
+        page = open_page(replay.url)
+        entered = [
+            n + 1
+            for n, r in enumerate(records)
+            if r["kind"] == "state_entered" and r["path"].count("/") >= 5
+        ]
+        for index in entered[:: max(1, len(entered) // 6)]:
+            page.evaluate(f"seek({index}, true)")
+            page.wait_for_selector(f"body[data-index='{index}']")
+            wait_until(
+                lambda: not page.evaluate("!!window.smachViewer.loadingSvg"), 10, "the layout"
+            )
+            active = [p for p in active_paths(page) if p.count("/") >= 5]
+            assert active, f"nothing highlighted after record {index}"
+            heights = [
+                b["h"]
+                for b in label_boxes(
+                    page, "#graph .node.active .label, #graph .cluster.active .ctitle"
+                )
+            ]
+            assert heights and min(heights) >= 9, heights  # readable, not 5 px
+            edges = label_boxes(page, "#graph .edge text")
+            for a, b in itertools.combinations(edges, 2):
+                assert not (
+                    a["x"] < b["x"] + b["w"] - 0.5 and b["x"] < a["x"] + a["w"] - 0.5
+                    and a["y"] < b["y"] + b["h"] - 0.5 and b["y"] < a["y"] + a["h"] - 0.5
+                ), (a, b)  # fmt: skip
+        shot(page, "mission-focus")

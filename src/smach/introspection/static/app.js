@@ -14,6 +14,8 @@ const S = {
   structureVersion: -1,
   collapsed: new Set(),
   autoCollapsed: false,
+  focus: true, // collapse what is off the active path (until the user opens or closes a box)
+  focusKey: null,
   selected: null,
   root: null,
   nodes: new Map(),
@@ -59,6 +61,10 @@ function rel(t) {
 async function loadStructure(version) {
   const params = new URLSearchParams({ version: String(version) });
   for (const c of S.collapsed) params.append("c", c);
+  if (S.focus) {
+    params.append("focus", "1");
+    for (const p of S.view ? S.view.active : []) params.append("a", p);
+  }
   const text = await (await fetch(`/api/svg?${params}`, { cache: "no-store" })).text();
   const graph = $("graph");
   graph.innerHTML = text;
@@ -77,6 +83,7 @@ async function loadStructure(version) {
   for (const el of svg.querySelectorAll(".edge")) {
     S.edges.set(`${el.dataset.container}|${el.dataset.source}|${el.dataset.outcome}`, el);
   }
+  if (S.focus && S.view) S.focusKey = focusKey(S.view);
   const rootCluster = svg.querySelector(".cluster");
   S.root = rootCluster ? rootCluster.dataset.path : null;
   if (!S.selected || !S.nodes.has(S.selected)) S.selected = S.root;
@@ -92,7 +99,7 @@ async function loadStructure(version) {
   } else {
     setViewBox(S.vb);
   }
-  if (!S.autoCollapsed) {
+  if (!S.autoCollapsed && !S.focus) {
     S.autoCollapsed = true;
     if (autoCollapse(svg)) return loadStructure(version);
   }
@@ -104,6 +111,37 @@ function autoCollapse(svg) {
   if (states <= 150) return false;
   for (const el of svg.querySelectorAll(".cluster.d2, .cluster.d3")) S.collapsed.add(el.dataset.path);
   return S.collapsed.size > 0;
+}
+
+// The boxes the focus view depends on: active paths that are containers (drawn as
+// clusters or collapsed boxes) or not drawn at all (inside a collapsed box).
+function focusKey(view) {
+  return view.active.filter((p) => {
+    const el = S.nodes.get(p);
+    return !el || !el.classList.contains("state");
+  }).join("|");
+}
+
+// A run entered or left a container: lay the graph out again around the active path.
+function refocus(view) {
+  if (!S.focus || S.loadingSvg) return false;
+  if (focusKey(view) === S.focusKey) return false;
+  S.fitted = false;
+  S.loadingSvg = loadStructure(S.structureVersion).then(() => {
+    S.loadingSvg = null;
+    applyView(S.view, true);
+  });
+  return true;
+}
+
+function setFocus(on) {
+  S.focus = on;
+  $("focus").classList.toggle("on", on);
+  if (on) {
+    S.collapsed.clear();
+    S.focusKey = null;
+    if (S.view) refocus(S.view);
+  }
 }
 
 function setViewBox(vb) {
@@ -169,6 +207,11 @@ function installPanZoom() {
     const toggle = ev.target.closest("[data-toggle]");
     if (toggle) {
       const path = toggle.dataset.toggle;
+      if (S.focus) {
+        // Leaving the focus view: keep what it showed, then apply the user's click.
+        for (const el of $("graph").querySelectorAll(".node.collapsed")) S.collapsed.add(el.dataset.path);
+        setFocus(false);
+      }
       if (S.collapsed.has(path)) S.collapsed.delete(path);
       else S.collapsed.add(path);
       select(path);
@@ -500,6 +543,7 @@ function applyView(view, force = false) {
     }
     return;
   }
+  if (!force && refocus(view)) return;
   applyGraph(view);
   renderSide(view);
   const status = $("status");
@@ -599,8 +643,16 @@ async function main() {
   $("mode").textContent = S.info.live ? "live" : "replay";
   $("mode").className = `pill ${S.info.live ? "live" : "replay"}`;
   $("fit").onclick = fit;
-  $("expand-all").onclick = () => { S.collapsed.clear(); refreshStructure(); };
+  const focus = document.createElement("button");
+  focus.id = "focus";
+  focus.textContent = "Focus";
+  focus.title = "show the active path large, the rest collapsed (the default)";
+  focus.className = "on";
+  $("fit").after(focus);
+  focus.onclick = () => { setFocus(true); refreshStructure(); };
+  $("expand-all").onclick = () => { setFocus(false); S.collapsed.clear(); refreshStructure(); };
   $("collapse-all").onclick = () => {
+    setFocus(false);
     for (const el of $("graph").querySelectorAll(".cluster")) if (el.dataset.path !== S.root) S.collapsed.add(el.dataset.path);
     refreshStructure();
   };
@@ -622,6 +674,7 @@ async function main() {
   window.addEventListener("resize", () => S.vb && setViewBox(S.vb));
   const view = await getJSON("/api/view");
   S.total = view.total;
+  S.view = view;
   await loadStructure(view.structure_version);
   applyView(view, true);
   await loadTimeline(S.total);
