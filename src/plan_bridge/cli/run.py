@@ -42,6 +42,15 @@ _probability = bounded(float, 0.0, 1.0, "a probability between 0 and 1")
 _non_negative_int = bounded(int, 0, float("inf"), "a whole number >= 0")
 
 
+def _breakpoint(text: str) -> str:
+    from smach.control import ControlError, check_pattern
+
+    try:
+        return check_pattern(text)
+    except ControlError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
 def _configure_run(parser: argparse.ArgumentParser) -> None:
     add_input_arguments(parser, optional=True)
     parser.add_argument(
@@ -98,6 +107,25 @@ def _configure_run(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "-v", "--verbose", action="store_true", help="also print the states each step enters"
+    )
+    control = parser.add_argument_group("runtime control", "see docs/control.md")
+    control.add_argument(
+        "--control",
+        action="store_true",
+        help="serve the viewer with control buttons and print a control URL (with a per-run "
+        "token) for the page and for `plan-bridge control`",
+    )
+    control.add_argument(
+        "--break",
+        dest="breakpoints",
+        action="append",
+        type=_breakpoint,
+        default=[],
+        metavar="PATTERN",
+        help="pause before entering states matching PATTERN (a path or glob); repeatable",
+    )
+    control.add_argument(
+        "--start-paused", action="store_true", help="hold the first state until resumed"
     )
     parser.add_argument(
         "--resume",
@@ -336,10 +364,22 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
 
         executive.checkpoint = write_checkpoint
     viewer = None
-    if args.viewer is not None:
+    if args.viewer is not None or args.control:
         from smach.introspection import serve
 
-        viewer = serve(executive, port=args.viewer)
+        viewer = serve(executive, port=args.viewer or 0)
+    console = None
+    if args.control or args.breakpoints or args.start_paused:
+        from plan_bridge.execution.control import OperatorConsole
+
+        console = OperatorConsole(
+            executive, journal=journal, breakpoints=args.breakpoints, paused=args.start_paused
+        )
+        if args.control and viewer is not None:
+            from smach.introspection.control_api import enable_controls
+
+            url = enable_controls(viewer, console.controller, actions=console.viewer_actions())
+            print(f"control: {url}", file=sys.stderr, flush=True)
     try:
         outcome = executive.execute()
     except SmachError as exc:
@@ -349,6 +389,8 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
         executive.report.explanation = str(exc)
         print(f"plan-bridge: mission failed: {exc}", file=sys.stderr, flush=True)
     finally:
+        if console is not None:
+            console.close()
         if viewer is not None and resources is not None:
             resources.callback(viewer.close)  # after the wait below, or on an error
         elif viewer is not None:

@@ -29,9 +29,9 @@ from __future__ import annotations
 
 import dataclasses
 import threading
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 from plan_bridge.errors import FactError, PlanBridgeError
 from plan_bridge.execution.compile import StepRecord, StepState
@@ -40,13 +40,20 @@ from plan_bridge.execution.semantics import ActionModel
 from plan_bridge.pddl.source import SourceText
 from plan_bridge.pddl.task import Fact, FactLike, PlanningTask, format_fact, parse_fact
 from plan_bridge.pddl.up_runtime import ensure_unified_planning
-from smach.control import Controller, controller_of
+from smach.control import Controller, ControlRecord, controller_of
 
 if TYPE_CHECKING:
     from plan_bridge.execution.executive import Executive
     from plan_bridge.planning.planner import PlanStep
 
-__all__ = ["MissionControl", "MissionControlError", "OperatorRequest", "task_with_goal"]
+__all__ = [
+    "MissionControl",
+    "MissionControlError",
+    "OperatorConsole",
+    "OperatorRequest",
+    "parse_goal",
+    "task_with_goal",
+]
 
 RequestKind = Literal["skip", "replan", "goal", "abort"]
 
@@ -83,10 +90,7 @@ def task_with_goal(task: PlanningTask, goal: Iterable[FactLike]) -> PlanningTask
     manager = problem.environment.expression_manager
     problem.add_goal(
         manager.And(
-            *(
-                problem.fluent(atom[0])(*(problem.object(arg) for arg in atom[1:]))
-                for atom in atoms
-            )
+            *(problem.fluent(atom[0])(*(problem.object(arg) for arg in atom[1:])) for atom in atoms)
         )
     )
     text = None
@@ -326,3 +330,79 @@ class MissionControl:
         if compiled is not None:
             compiled.machine.request_preempt()
         return request
+
+
+class OperatorConsole:
+    """Everything an operator needs on a running executive, wired in one call.
+
+    A :class:`~smach.control.Controller` on the executive (pause, step, breakpoints,
+    force outcome), a :class:`MissionControl` (skip, replan, goal, abort) and every
+    control action written to ``journal`` as a ``control`` record. For a viewer,
+    pass :meth:`viewer_actions` to ``smach.introspection.control_api.enable_controls``.
+    """
+
+    def __init__(
+        self,
+        executive: Executive,
+        *,
+        journal: Any = None,
+        breakpoints: Iterable[str] = (),
+        paused: bool = False,
+        source: str = "cli",
+    ) -> None:
+        existing = controller_of(executive)
+        self.controller = existing if existing is not None else Controller(executive)
+        self._own_controller = existing is None
+        self.mission = MissionControl(executive, self.controller)
+        self.journal = journal
+        if journal is not None:
+            self.controller.add_observer(self._write)
+        for pattern in breakpoints:
+            self.controller.add_breakpoint(pattern, source=source)
+        if paused:
+            self.controller.pause(source=source)
+        self.executive = executive
+
+    def _write(self, record: ControlRecord) -> None:
+        self.journal.write_record("control", **record.to_json())
+
+    def viewer_actions(self) -> dict[str, Callable[[Mapping[str, Any]], object]]:
+        """The mission's actions for the viewer and the CLI (``source`` from the body)."""
+        mission = self.mission
+
+        def source(body: Mapping[str, Any]) -> str:
+            value = body.get("source", "viewer")
+            return value if value in ("viewer", "cli") else "viewer"
+
+        def skip(body: Mapping[str, Any]) -> object:
+            effects = body.get("apply_effects")
+            if not isinstance(effects, bool):
+                raise ValueError("skip needs 'apply_effects': true or false")
+            step = body.get("step")
+            if step is not None and not isinstance(step, str | int):
+                raise ValueError(f"'step' is a step label or index, got {step!r}")
+            return mission.skip(step, apply_effects=effects, source=source(body)).reason
+
+        def goal(body: Mapping[str, Any]) -> object:
+            text = body.get("goal")
+            if not isinstance(text, str) or not text.strip():
+                raise ValueError("goal needs 'goal': atoms like (at robot1 kitchen)")
+            return mission.change_goal(text, source=source(body)).reason
+
+        def reason(body: Mapping[str, Any]) -> str:
+            text = body.get("reason", "")
+            return text[:500] if isinstance(text, str) else ""
+
+        return {
+            "skip": skip,
+            "replan": lambda body: mission.replan(source=source(body)).reason,
+            "goal": goal,
+            "abort": lambda body: mission.abort(reason(body), source=source(body)).reason,
+        }
+
+    def close(self) -> None:
+        self.mission.close()
+        if self.journal is not None:
+            self.controller.remove_observer(self._write)
+        if self._own_controller:
+            self.controller.close()

@@ -105,7 +105,9 @@ class ViewerControls:
         if path is not None and not isinstance(path, str):
             raise ValueError(f"'path' must be a string, got {path!r}")
         ctl = self.controller
-        source = "viewer"
+        # Where the request came from: the page, or `plan-bridge control` (same API).
+        source = body.get("source") if body.get("source") in ("viewer", "cli") else "viewer"
+        assert isinstance(source, str)
         try:
             if action == "pause":
                 ctl.pause(source=source)
@@ -137,9 +139,7 @@ class ViewerControls:
             raise ValueError(str(exc)) from exc
         return {"ok": True, "status": ctl.status().to_json()}
 
-    def handle_post(
-        self, headers: Headers, read: Callable[[int], bytes]
-    ) -> dict[str, Any]:
+    def handle_post(self, headers: Headers, read: Callable[[int], bytes]) -> dict[str, Any]:
         """Check the headers and the body of a POST, then :meth:`perform` it.
 
         Raises PermissionError (-> 403) for a missing or wrong token and ValueError
