@@ -7,7 +7,7 @@ In order, within the policy's budgets:
    failed step (its effects came true anyway, e.g. a door somebody else opened);
 2. **retry** the step while the held plan, that step included, is still valid from
    the belief (a fault that left the world as it was: no planner can do better than
-   the plan in force), at most ``max_step_retries`` times per step and plan; then
+   the plan in force), at most ``max_step_retries`` (3) times per step and plan; then
    run it with another **variant** of its skill, each variant once;
 3. **repair** (STRIPS-style plans): regress the goal through the rest of the plan to
    the facts it needs, plan only a prefix that re-establishes the broken ones, and

@@ -301,6 +301,10 @@ def _failing(world: SimulatedWorld, action: str, times: int) -> list[PlanStep]:
     return failed
 
 
+#: Retries of the default policy: one failure more sends the step to the planner.
+RETRIES = ReplanPolicy().max_step_retries
+
+
 def _rooms() -> PlanningTask:
     return load_task(ROOMS / "domain.pddl", ROOMS / "problems" / "p01.pddl")
 
@@ -309,12 +313,12 @@ def _rooms() -> PlanningTask:
 def test_a_replan_that_times_out_goes_on_with_the_held_plan_to_the_goal() -> None:
     task = _rooms()
     world = SimulatedWorld(task)
-    failed = _failing(world, "pick", 3)  # one more than the two retries
+    failed = _failing(world, "pick", RETRIES + 1)
     planner = FirstPlanOnly(PlanStatus.TIMEOUT)
     executive = Executive(task, symbolic_skills(world), planner)
     assert executive.execute() == "succeeded"
     report = executive.report
-    assert len(failed) == 3 and report.retries == 2
+    assert len(failed) == RETRIES + 1 and report.retries == RETRIES
     assert report.replans == 1 and report.holds == 1
     assert report.goal_reached and world.goal_reached()
     hold = next(d for d in report.decisions if d["decision"] == "hold")
@@ -326,7 +330,7 @@ def test_a_replan_that_times_out_goes_on_with_the_held_plan_to_the_goal() -> Non
 def test_without_holding_the_same_timeout_aborts_the_mission() -> None:
     task = _rooms()
     world = SimulatedWorld(task)
-    _failing(world, "pick", 3)
+    _failing(world, "pick", RETRIES + 1)
     policy = ReplanPolicy(hold_valid_plan=False)
     executive = Executive(task, symbolic_skills(world), FirstPlanOnly(), policy=policy)
     assert executive.execute() == "aborted"
@@ -358,7 +362,7 @@ def test_a_failed_replan_is_not_held_when_the_held_plan_broke() -> None:
 def test_a_replan_gets_its_own_deadline() -> None:
     task = _rooms()
     world = SimulatedWorld(task)
-    _failing(world, "pick", 3)
+    _failing(world, "pick", RETRIES + 1)
     planner = FirstPlanOnly()
     policy = ReplanPolicy(planner_timeout=40.0, replan_timeout=7.5)
     executive = Executive(task, symbolic_skills(world), planner, policy=policy)
@@ -370,11 +374,11 @@ def test_a_replan_gets_its_own_deadline() -> None:
 def test_retries_go_on_while_the_held_plan_is_valid_without_calling_the_planner() -> None:
     task = _rooms()
     world = SimulatedWorld(task)
-    _failing(world, "pick", 2)
+    _failing(world, "pick", RETRIES)
     planner = FirstPlanOnly()
     executive = Executive(task, symbolic_skills(world), planner)
     assert executive.execute() == "succeeded"
-    assert executive.report.retries == 2
+    assert executive.report.retries == RETRIES
     assert executive.report.planner_calls == 1 and executive.report.replans == 0
 
 
@@ -405,7 +409,7 @@ def test_a_shared_plan_cache_reuses_the_plan_of_an_identical_state_and_goal() ->
 def test_the_json_report_counts_planner_calls_reuses_and_holds() -> None:
     task = _rooms()
     world = SimulatedWorld(task)
-    _failing(world, "pick", 3)
+    _failing(world, "pick", RETRIES + 1)
     executive = Executive(task, symbolic_skills(world), FirstPlanOnly())
     executive.execute()
     data = executive.report.to_json()
@@ -472,7 +476,7 @@ def test_a_skill_that_keeps_failing_is_replaced_by_its_variant_without_planning(
     executive = Executive(task, skills, FirstPlanOnly())
     assert executive.execute() == "succeeded"
     report = executive.report
-    assert report.retries == 2 and report.variants_tried == 1
+    assert report.retries == RETRIES and report.variants_tried == 1
     assert report.planner_calls == 1 and report.replans == 0
     variant = next(d for d in report.decisions if d["decision"] == "variant")
     assert "'careful'" in variant["reason"] and variant["step"] == "(pick robot1 cup kitchen)"
@@ -493,7 +497,8 @@ def test_an_unknown_skill_variant_is_named_with_the_registered_ones() -> None:
 def test_a_state_the_planner_failed_from_is_not_planned_from_again() -> None:
     task = _rooms()
     world = SimulatedWorld(task)
-    _failing(world, "pick", 6)  # two rounds of retries, replan and hold, then success
+    # Two rounds of retries, replan and hold, then success.
+    _failing(world, "pick", 2 * (RETRIES + 1))
     planner = FirstPlanOnly()
     executive = Executive(task, symbolic_skills(world), planner)
     assert executive.execute() == "succeeded"
