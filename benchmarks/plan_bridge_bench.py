@@ -31,6 +31,10 @@ Sections (every ratio is computed from numbers measured in the same run):
 (d) **start-up**: ``plan-bridge --help`` and bad-input errors, as subprocesses.
 (e) **scaling**: generated chain problems of growing size: plan, compile, execute and
     replan times; plotted to docs/images/plan_bridge_scaling.png (needs matplotlib).
+(f) **missions with faults**: per recovery policy (no repair, the recovery before
+    issue 19, the default, the default with a shared plan cache), planner calls,
+    replans, repairs, held and reused plans and the planning share of the mission
+    time; see benchmarks/plan_bridge_recovery.py.
 """
 
 from __future__ import annotations
@@ -56,6 +60,11 @@ from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from plan_bridge_recovery import print_section, recovery_section  # noqa: E402
+
+RECOVERY_TARGET_PROBLEM = "blocks/probBLOCKS-14-0"
 
 BENCH = (ROOT / ".." / "shared" / "pddl-bench").resolve()
 PLAN_BRIDGE = Path(sys.executable).with_name("plan-bridge")
@@ -695,6 +704,8 @@ def print_report(results: dict[str, Any]) -> None:
                 f"{r['cold_replan_s']:.3f} |"
             )
         out(f"\nplot: {results.get('plot', 'not written')}\n")
+    if "recovery" in results:
+        print_section(results["recovery"], out)
     out("## targets\n")
     out("| target | measured | result |")
     out("|---|---:|---|")
@@ -722,6 +733,18 @@ def targets_of(results: dict[str, Any]) -> list[tuple[str, str, bool]]:
                     r["median_s"] < r["target_s"],
                 )
             )
+    if "recovery" in results:
+        for r in results["recovery"]["rows"]:
+            if r["problem"] == RECOVERY_TARGET_PROBLEM and r["policy"] == "full, shared cache":
+                value = r["median_share"]
+                rows.append(
+                    (
+                        "planning <= 30% of the mission time, blocks-14 with faults "
+                        "(median mission, shared plan cache)",
+                        f"{value:.0%}",
+                        value <= 0.3,
+                    )
+                )
     return rows
 
 
@@ -731,7 +754,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--json", metavar="FILE", help="also write the results as JSON")
     parser.add_argument("--trials", type=int, default=None, help="trials per problem")
     parser.add_argument(
-        "--sections", default="abcde", help="which sections to run (letters a-e, default all)"
+        "--sections", default="abcdef", help="which sections to run (letters a-f, default all)"
     )
     parser.add_argument("--no-plot", action="store_true", help="do not write the PNG")
     args = parser.parse_args(argv)
@@ -772,6 +795,10 @@ def main(argv: list[str] | None = None) -> int:
         "e": lambda: (
             "scaling",
             scaling_section([10, 40] if args.quick else [10, 25, 50, 100, 200, 400, 800], planner),
+        ),
+        "f": lambda: (
+            "recovery",
+            recovery_section(planner, 3 if args.quick else 10, quick=args.quick),
         ),
     }
     for letter in args.sections:
