@@ -53,7 +53,10 @@ class _Context:
 
 def _suggest(word: str, choices: Iterable[str]) -> str:
     options = sorted(choices)
-    close = difflib.get_close_matches(word, options, n=1, cutoff=0.6)
+    # difflib is quadratic-ish per candidate: on huge problems compare with the
+    # names that share the first letter only.
+    pool = options if len(options) <= 2000 else [o for o in options if o[:1] == word[:1]][:2000]
+    close = difflib.get_close_matches(word, pool, n=1, cutoff=0.6)
     shown = ", ".join(options[:30]) + (" ..." if len(options) > 30 else "")
     guess = f"did you mean {close[0]}? " if close else ""
     return f"{guess}declared: {shown or 'none'}"

@@ -52,8 +52,8 @@ ENGINES = {
 }
 
 _CLASSICAL = ("fast-downward",)
-_TEMPORAL = ("tamer", "kairos")
-_NUMERIC = ("enhsp", "kairos", "tamer")
+_TEMPORAL = ("kairos", "tamer")
+_NUMERIC = ("kairos", "tamer", "enhsp")
 
 
 @dataclass(frozen=True)

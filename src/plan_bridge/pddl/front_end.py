@@ -31,6 +31,7 @@ from plan_bridge.pddl.source import (
     DEFAULT_MAX_DEPTH,
     SourceText,
     check_source,
+    paused_gc,
     read_source,
 )
 
@@ -111,6 +112,11 @@ def analyse(domain: SourceText, problem: SourceText) -> FrontEnd:
     """The positioned pass over sources that passed :func:`check_source`.
 
     Raises :class:`PddlError` naming the first error (and listing the others)."""
+    with paused_gc():
+        return _analyse(domain, problem)
+
+
+def _analyse(domain: SourceText, problem: SourceText) -> FrontEnd:
     diags = Diagnostics()
     usage = Usage()
     domain_model = read_domain(domain, diags)

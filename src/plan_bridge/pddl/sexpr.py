@@ -12,15 +12,17 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
-from plan_bridge.pddl.source import SourceText
+from plan_bridge.pddl.source import SourceText, paused_gc
 
 __all__ = ["Atom", "Form", "Node", "read_tree", "walk"]
 
 
-@dataclass(frozen=True, slots=True)
-class Atom:
-    """A word: a name, a ``?variable``, a ``:keyword`` or a number (lower case)."""
+class Atom(NamedTuple):
+    """A word: a name, a ``?variable``, a ``:keyword`` or a number (lower case).
+
+    A tuple, not a dataclass: a 10 MB problem has millions of them."""
 
     text: str
     offset: int
@@ -58,20 +60,26 @@ Node = Atom | Form
 
 def read_tree(source: SourceText) -> Form:
     """The top-level ``(define ...)`` form of ``source``."""
+    with paused_gc():
+        return _read_tree(source)
+
+
+def _read_tree(source: SourceText) -> Form:
     stack: list[Form] = [Form(-1)]
-    for token in source.tokens:
-        if token.text == "(":
-            form = Form(token.offset)
-            stack[-1].items.append(form)
+    items = stack[-1].items
+    for text, offset in source.tokens:
+        if text == "(":
+            form = Form(offset)
+            items.append(form)
             stack.append(form)
-        elif token.text == ")":
+            items = form.items
+        elif text == ")":
             if len(stack) == 1:
-                raise source.error(
-                    "unbalanced parentheses: this ')' has no matching '('", token.offset
-                )
-            stack.pop().end = token.offset + 1
+                raise source.error("unbalanced parentheses: this ')' has no matching '('", offset)
+            stack.pop().end = offset + 1
+            items = stack[-1].items
         else:
-            stack[-1].items.append(Atom(token.text, token.offset))
+            items.append(Atom(text, offset))
     if len(stack) != 1:
         raise source.error("unbalanced parentheses: a '(' is never closed", stack[-1].offset)
     top = stack[0].items

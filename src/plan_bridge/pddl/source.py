@@ -13,12 +13,15 @@ ourselves. None of this imports unified-planning, so bad input fails fast.
 from __future__ import annotations
 
 import bisect
+import contextlib
 import difflib
+import gc
 import hashlib
 import re
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import NamedTuple
 
 from plan_bridge.errors import PddlError, UnsupportedFeatureError
 from plan_bridge.pddl.features import classify
@@ -120,10 +123,26 @@ _ACTION_KEYWORDS = {
 }
 
 
-@dataclass(frozen=True)
-class Token:
+class Token(NamedTuple):
+    """A word or parenthesis (lower case) and its character offset.
+
+    A tuple, not a dataclass: a 10 MB file has millions of them."""
+
     text: str
     offset: int
+
+
+@contextlib.contextmanager
+def paused_gc() -> Iterator[None]:
+    """Build millions of small objects (tokens, atoms) without the cyclic garbage
+    collector rescanning them every few thousand allocations (3x faster on 10 MB)."""
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if enabled:
+            gc.enable()
 
 
 class SourceText:
@@ -196,12 +215,18 @@ class SourceText:
     @property
     def tokens(self) -> list[Token]:
         if self._tokens is None:
-            self._tokens = [
-                Token(m.group().lower(), m.start())
-                for m in _TOKEN.finditer(self.text)
-                if not m.group().startswith(";")
-            ]
+            with paused_gc():
+                self._tokens = self._tokenize()
         return self._tokens
+
+    def _tokenize(self) -> list[Token]:
+        lowered = self.text.lower()
+        if len(lowered) == len(self.text):
+            return [Token(m[0], m.start()) for m in _TOKEN.finditer(lowered) if m[0][0] != ";"]
+        # A few Unicode letters change length when lowered: lower word by word.
+        return [
+            Token(m[0].lower(), m.start()) for m in _TOKEN.finditer(self.text) if m[0][0] != ";"
+        ]
 
     def sections(self) -> Iterator[tuple[str, int, int]]:
         """Top-level sections of the ``define`` form: (head, start, end) offsets.
