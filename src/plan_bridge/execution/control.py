@@ -58,8 +58,11 @@ __all__ = [
 RequestKind = Literal["skip", "replan", "goal", "abort"]
 
 
-class MissionControlError(PlanBridgeError):
-    """An operator request that cannot be carried out (what, where, what is allowed)."""
+class MissionControlError(PlanBridgeError, ValueError):
+    """An operator request that cannot be carried out (what, where, what is allowed).
+
+    A ValueError, as a refused request is one: the viewer answers 400, ROS ``False``.
+    """
 
 
 @dataclass(frozen=True)
@@ -367,12 +370,12 @@ class OperatorConsole:
         self.journal.write_record("control", **record.to_json())
 
     def viewer_actions(self) -> dict[str, Callable[[Mapping[str, Any]], object]]:
-        """The mission's actions for the viewer and the CLI (``source`` from the body)."""
+        """The mission's actions for the viewer, the CLI and ROS (``source`` from the body)."""
         mission = self.mission
 
         def source(body: Mapping[str, Any]) -> str:
             value = body.get("source", "viewer")
-            return value if value in ("viewer", "cli") else "viewer"
+            return value if value in ("viewer", "cli", "ros") else "viewer"
 
         def skip(body: Mapping[str, Any]) -> object:
             effects = body.get("apply_effects")

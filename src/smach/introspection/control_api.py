@@ -98,16 +98,22 @@ class ViewerControls:
         data["history"] = [r.to_json() for r in list(ctl.history)[-15:]]
         return data
 
-    def perform(self, body: Mapping[str, Any]) -> dict[str, Any]:
-        """Carry out one request; ValueError (-> 400) with a message when it cannot be."""
+    def perform(self, body: Mapping[str, Any], *, source: str | None = None) -> dict[str, Any]:
+        """Carry out one request; ValueError (-> 400) with a message when it cannot be.
+
+        ``source`` names where it came from (default: the body's ``source`` when it is
+        ``viewer`` or ``cli``, else ``viewer``); ROS services pass ``ros``.
+        """
         action = body.get("action")
         path = body.get("path")
         if path is not None and not isinstance(path, str):
             raise ValueError(f"'path' must be a string, got {path!r}")
         ctl = self.controller
-        # Where the request came from: the page, or `plan-bridge control` (same API).
-        source = body.get("source") if body.get("source") in ("viewer", "cli") else "viewer"
-        assert isinstance(source, str)
+        if source is None:
+            # The page, or `plan-bridge control` (same HTTP API).
+            given = body.get("source")
+            source = given if isinstance(given, str) and given in ("viewer", "cli") else "viewer"
+        body = {**body, "source": source}  # extra actions read it too
         try:
             if action == "pause":
                 ctl.pause(source=source)
@@ -130,7 +136,12 @@ class ViewerControls:
             elif action == "clear_breakpoints":
                 ctl.clear_breakpoints(source=source)
             elif isinstance(action, str) and action in self.actions:
-                result = self.actions[action](body)
+                try:
+                    result = self.actions[action](body)
+                except ValueError:
+                    raise
+                except Exception as exc:  # an answer, never a dropped connection
+                    raise ValueError(f"{action} failed: {type(exc).__name__}: {exc}") from exc
                 return {"ok": True, "result": str(result) if result is not None else None}
             else:
                 allowed = ", ".join([*_CORE_ACTIONS, *sorted(self.actions)])

@@ -131,6 +131,7 @@ class IntrospectionServer(Node):  # type: ignore[misc]
         self._thread: threading.Thread | None = None
         self._status_pub: Any = None
         self._structure_pub: Any = None
+        self._control: Any = None  # smach.ros.control.ControlServices, see serve_control
         super().__init__(_node_name(topic_base), context=ensure_init(context))
         self.server_name = topic_base
         self._state = state
@@ -154,6 +155,15 @@ class IntrospectionServer(Node):  # type: ignore[misc]
         self._lock = threading.Lock()
         self._wake = threading.Event()
         self.published = 0
+
+    def serve_control(self, controller: Any, *, actions: Any = None) -> Any:
+        """Offer runtime-control services for ``controller`` (see smach/ros/control.py)."""
+        from smach.ros.control import ControlServices
+
+        if self._control is not None:
+            self._control.close()
+        self._control = ControlServices(self, controller, actions=actions)
+        return self._control
 
     # -- life cycle -----------------------------------------------------------------------
     def start(self) -> IntrospectionServer:
@@ -188,6 +198,9 @@ class IntrospectionServer(Node):  # type: ignore[misc]
 
     def stop(self) -> None:
         """Stop publishing (listeners detached, publisher thread ended)."""
+        if self._control is not None:
+            self._control.close()
+            self._control = None
         if not self._running:
             return
         self._running = False
