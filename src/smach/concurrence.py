@@ -71,6 +71,8 @@ class Concurrence(Container):
     """A container whose children all run at the same time."""
 
     _transition_cb_events: ClassVar[tuple[type[Event], ...]] = (StateEntered, StateExited)
+    # The outcome policy only chooses among declared outcomes (checked at construction).
+    _outcome_checked = True
 
     def __init__(
         self,

@@ -32,7 +32,7 @@ import functools
 import threading
 import types
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
-from typing import Any, Concatenate, Generic, ParamSpec, TypeVar
+from typing import Any, ClassVar, Concatenate, Generic, ParamSpec, TypeVar
 
 import smach as _smach
 from smach.container_events import ContainerEvents
@@ -109,6 +109,10 @@ def _label_problem(label: object) -> str | None:
 class Container(ContainerEvents, State):
     """Base class of every container (a state made of states)."""
 
+    #: True where ``_run`` can only return a declared outcome (checked before the run),
+    #: so the protocol need not check it again.
+    _outcome_checked: ClassVar[bool] = False
+
     def __init__(
         self,
         outcomes: Iterable[str] | None = None,
@@ -134,6 +138,7 @@ class Container(ContainerEvents, State):
         self._stale = True
         self._consistent = False
         self._subtree_ok = False
+        self._copies_in = self._copies_out = True  # (until _prepare knows better)
 
     # -- userdata --------------------------------------------------------------------
     @property
@@ -337,7 +342,7 @@ class Container(ContainerEvents, State):
             outcome = self._run()
             if outcome is None:
                 return None
-            if outcome not in self._outcomes:
+            if not self._outcome_checked and outcome not in self._outcomes:
                 raise InvalidOutcomeError(
                     f"{self._path}: the {type(self).__name__} ended with {outcome!r}, which is "
                     f"not one of its outcomes: {', '.join(self._outcomes)}"
@@ -346,7 +351,7 @@ class Container(ContainerEvents, State):
                 self._emit_terminated(self._terminal_states(), outcome, self._thread)
             elif self._log_info:
                 self._log_terminated(self._terminal_states(), outcome)
-            if parent_ud is not None and self._output_keys:
+            if parent_ud is not None and self._copies_out:
                 self._copy_output_keys(parent_ud)
             return outcome
         except Exception as exc:
@@ -382,6 +387,10 @@ class Container(ContainerEvents, State):
         if not self._subtree_ok:
             self._check_before_run()
         self._compile()
+        # Flags on the instance, so that a run does not touch the key dicts (a fresh
+        # machine's first run pays a cache miss for every object it touches).
+        self._copies_in = bool(self._input_keys)
+        self._copies_out = bool(self._output_keys)
         self._stale = False
 
     def _compile(self) -> None:
@@ -414,7 +423,7 @@ class Container(ContainerEvents, State):
         Whether INFO lines are wanted is decided once per top-level run (it costs a
         logging lookup) and shared through the bus with the containers below.
         """
-        if parent_ud is not None and self._input_keys:
+        if parent_ud is not None and self._copies_in:
             self._copy_input_keys(parent_ud)
         bus = self._bus
         if self._parent is None:

