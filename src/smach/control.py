@@ -251,6 +251,20 @@ class Controller:
         with self._lock:
             self._observers = (*self._observers, observer)
 
+    def journal_to(self, journal: Any) -> Observer:
+        """Write every control action to ``journal`` as a ``control`` record from now on.
+
+        ``journal`` is a :class:`smach.introspection.journal.Journal` (anything with its
+        ``write_record(kind, **fields)``); the record is on disk when the request
+        returns. Returns the observer (for :meth:`remove_observer`).
+        """
+
+        def write(record: ControlRecord) -> None:
+            journal.write_record("control", **record.to_json())
+
+        self.add_observer(write)
+        return write
+
     def remove_observer(self, observer: Observer) -> None:
         with self._lock:
             self._observers = tuple(o for o in self._observers if o != observer)

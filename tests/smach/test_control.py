@@ -5,6 +5,7 @@ from __future__ import annotations
 import threading
 import time
 from collections.abc import Callable
+from pathlib import Path
 
 import pytest
 
@@ -461,3 +462,31 @@ def test_concurrent_requests_during_runs_never_hang_or_lose_the_outcome() -> Non
         for t in threads:
             t.join(5)
     assert outcomes == ["done"] * 20
+
+
+# -- journal -----------------------------------------------------------------------------------
+def test_every_control_action_is_journaled_with_what_where_and_when(tmp_path: Path) -> None:
+    from smach.introspection.journal import Journal, read_journal
+
+    sm, _ = _chain("A", "B")
+    ctl = Controller(sm)
+    path = tmp_path / "run.jsonl"
+    with Journal(path, sm) as journal:
+        ctl.journal_to(journal)
+        ctl.add_breakpoint("/ROOT/B", source="cli")
+        run = Runner(sm)
+        assert ctl.wait_for("at_breakpoint", timeout=5)
+        ctl.resume(source="viewer")
+        assert run.result() == "done"
+    _, records = read_journal(path)
+    control = [r for r in records if r["kind"] == "control"]
+    assert [(r["action"], r["source"], r["path"]) for r in control] == [
+        ("add_breakpoint", "cli", "/ROOT/B"),
+        ("breakpoint_hit", "machine", "/ROOT/B"),
+        ("resume", "viewer", ""),
+    ]
+    assert control[1]["state"] == "at_breakpoint"
+    # Placed among the events by their monotonic time: the hit comes after A exited.
+    exited_a = next(r for r in records if r["kind"] == "state_exited" and r["path"] == "/ROOT/A")
+    assert exited_a["time"] <= control[1]["time"] <= control[2]["time"]
+    assert all(isinstance(r["wall"], float) and r["thread"] for r in control)

@@ -153,3 +153,47 @@ def test_a_read_only_viewer_shows_no_control_panel(browser: Any) -> None:
             assert page.query_selector("#control-bar") is None
         finally:
             page.close()
+
+
+def test_the_replay_shows_control_records_and_the_recorded_control_state(
+    browser: Any, tmp_path: Path
+) -> None:
+    from smach.introspection import JournalSource
+    from smach.introspection.journal import Journal
+
+    sm, grasp = machine()
+    ctl = Controller(sm)
+    path = tmp_path / "run.jsonl"
+    with Journal(path, sm) as journal:
+        ctl.journal_to(journal)
+        ctl.add_breakpoint("/ROOT/GRASP", source="cli")
+        result: list[str | None] = []
+        runner = threading.Thread(target=lambda: result.append(sm.execute()), daemon=True)
+        runner.start()
+        assert ctl.wait_for("at_breakpoint", timeout=10)
+        ctl.resume(source="viewer")
+        assert grasp.started.wait(10)
+        ctl.force_outcome("grasped", source="ros")
+        runner.join(10)
+    assert result == ["done"]
+    with serve(JournalSource(path), quiet=True) as viewer:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        try:
+            page.goto(viewer.url)
+            page.wait_for_selector("body[data-ready='1']", timeout=10_000)
+            rows = page.locator("#events tr[data-kind='control']")
+            wait_until(lambda: rows.count() == 5, 10, "five control rows in the timeline")
+            texts = [str(t) for t in rows.all_text_contents()]
+            assert "add_breakpoint (from cli)" in texts[0]
+            assert "breakpoint_hit (from machine) → at_breakpoint" in texts[1]
+            assert "outcome_forced (from machine)" in texts[4]
+            wait_until(
+                lambda: (
+                    "(last: outcome_forced from machine)"
+                    in str(page.text_content("#control-replay") or "")
+                ),
+                10,
+                "the recorded control state",
+            )
+        finally:
+            page.close()

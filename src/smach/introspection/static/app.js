@@ -468,6 +468,7 @@ function describe(r) {
     case "executive_decision": return `${r.decision}: ${r.reason}`;
     case "step_finished": return `step ${r.index} ${r.action} → ${r.outcome}`;
     case "observations_applied": return `observed ${(r.changed || []).join(", ")}`;
+    case "control": return `${r.action} (from ${r.source})${r.details && r.details.reason ? ": " + r.details.reason : ""} → ${r.state}`;
     default: return short(r, 200);
   }
 }

@@ -171,6 +171,40 @@
     }
   }
 
+  // -- replay: the control state recorded in the journal at the moment shown ------------------
+  const R = { key: null, busy: false };
+
+  async function replayPoll() {
+    const S = viewer();
+    const end = S.cursor == null ? S.total : S.cursor;
+    const key = `${end}`;
+    if (R.busy || key === R.key || !end) return;
+    R.busy = true;
+    R.key = key;
+    try {
+      const records = await (await fetch(`/api/records?start=${Math.max(0, end - 2000)}&end=${end}`, { cache: "no-store" })).json();
+      let last = null;
+      for (const r of records) if (r.kind === "control") last = r;
+      let pill = byId("control-replay");
+      if (!last && !pill) return;
+      if (!pill) {
+        pill = document.createElement("span");
+        pill.id = "control-replay";
+        pill.className = "pill";
+        const header = byId("bar");
+        header.insertBefore(pill, header.querySelector(".spacer"));
+      }
+      pill.textContent = last
+        ? `control: ${last.state.replace("_", " ")}${last.action === "breakpoint_hit" ? " " + last.path : ""} (last: ${last.action} from ${last.source})`
+        : "control: running";
+      pill.dataset.state = last ? last.state : "running";
+    } catch (err) {
+      /* no records yet */
+    } finally {
+      R.busy = false;
+    }
+  }
+
   async function start() {
     let info;
     try {
@@ -178,7 +212,11 @@
     } catch (err) {
       return;
     }
-    if (!info.controls) return;
+    if (!info.controls) {
+      // A journal (or a run without controls): show the recorded control state, if any.
+      setInterval(replayPoll, 500);
+      return;
+    }
     C.enabled = true;
     C.token = readToken();
     const first = await (await fetch("/api/control", { cache: "no-store" })).json();
