@@ -228,7 +228,7 @@ class Concurrence(Container):
 
     def _run_child(self, run: _Run, child: _Child) -> None:
         label = child.label
-        observed = self._bus.listeners or self._local or self._log_info
+        observed = self._bus.listeners or self._local  # (log lines need no lock: see below)
         control = self._bus.control  # runtime control (smach.control): None unless attached
         path = f"{self._path}/{label}" if control is not None else ""
         try:
@@ -253,6 +253,8 @@ class Concurrence(Container):
             self._child_finished_watched(run, label, outcome, bool(observed))
         else:
             run.results[label] = outcome
+            if self._log_info:
+                self._log_exited(label, outcome)
         if next(run.finished) == run.size:
             run.done.release()
 
@@ -262,7 +264,9 @@ class Concurrence(Container):
             run.results[label] = outcome
             try:
                 if observed:
-                    self._emit_exited(label, outcome)
+                    self._emit_exited(label, outcome)  # (and the log line, if wanted)
+                elif self._log_info:
+                    self._log_exited(label, outcome)
                 to_preempt = self._termination_request(run)
             except Exception as exc:
                 run.errors.append(exc)
