@@ -19,6 +19,7 @@ import json
 import os
 from typing import Any
 
+from smach.introspection.compact import structure_of
 from smach.introspection.journal import read_journal, read_states
 from smach.introspection.model import History, graft
 
@@ -75,7 +76,7 @@ def journal_problems(path: str | os.PathLike[str], *, every: int = 1) -> list[st
     for n, record in enumerate(records, 1):
         kind = record.get("kind")
         if kind == "structure":
-            tree = graft(tree, record["structure"], record.get("path", ""))
+            tree = graft(tree, structure_of(record) or {}, record.get("path", ""))
             in_force = _paths(tree)
             started = next(
                 (
@@ -105,8 +106,10 @@ def journal_problems(path: str | os.PathLike[str], *, every: int = 1) -> list[st
     if changes and wholes and max(changes) >= max(wholes):
         problems.append("a checkpoint change is as large as a whole checkpoint")
     history = History(header, limit=len(records) + 1)
-    first: dict[str, Any] = header.get("structure") or next(
-        (r["structure"] for r in records if r.get("kind") == "structure"), {}
+    first: dict[str, Any] = (
+        header.get("structure")
+        or next((structure_of(r) for r in records if r.get("kind") == "structure"), None)
+        or {}
     )
     root = str(first.get("path", "/ROOT"))
     active: set[str] = set()

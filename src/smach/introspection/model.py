@@ -24,6 +24,8 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from smach.introspection.compact import structure_of
+
 __all__ = ["History", "ViewModel", "active_at", "fold", "graft"]
 
 MAX_ERRORS = 50
@@ -152,8 +154,8 @@ class ViewModel:
             self.userdata[path] = dict(values)
 
     def _structure(self, path: str, record: Mapping[str, Any]) -> None:
-        tree = record.get("structure")
-        if isinstance(tree, Mapping):
+        tree = structure_of(dict(record))
+        if tree is not None:
             self.structure = graft(self.structure, dict(tree), path)
             self.structure_version += 1
             # The machine that was at ``path`` is gone: nothing of it is active any more.

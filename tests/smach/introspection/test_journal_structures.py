@@ -12,6 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import smach
+from smach.introspection.compact import compact, expand, structure_of
 from smach.introspection.delta import SAME, diff, patch
 from smach.introspection.fidelity import journal_problems
 from smach.introspection.journal import (
@@ -22,6 +23,7 @@ from smach.introspection.journal import (
     read_states,
 )
 from smach.introspection.model import fold, graft
+from smach.introspection.structure import snapshot
 from smach.testing import ScriptedState
 
 
@@ -76,7 +78,7 @@ def test_a_machine_replaced_at_the_same_path_has_its_own_structure_written_when_
         assert records[n + 1]["kind"] == "container_started"
         assert records[n + 1]["path"] == record["path"]
         assert records[n + 1]["time"] == record["time"]
-    labels = [[c["label"] for c in r["structure"]["children"]] for _, r in structures]
+    labels = [[c["label"] for c in structure_of(r)["children"]] for _, r in structures]
     assert labels == [["S03", "S04"], ["S05"]]
     assert journal_problems(path) == []
 
@@ -191,3 +193,38 @@ def test_a_file_of_one_torn_line_becomes_empty_and_a_missing_file_is_left_alone(
     assert path.read_bytes() == b""
     drop_torn_line(tmp_path / "missing.jsonl")
     assert not (tmp_path / "missing.jsonl").exists()
+
+
+def sorted_edges(tree: dict[str, Any]) -> dict[str, Any]:
+    out = dict(tree)
+    if "edges" in out:
+        out["edges"] = sorted(out["edges"], key=lambda e: json.dumps(e, sort_keys=True))
+    if "children" in out:
+        out["children"] = [sorted_edges(c) for c in out["children"]]
+    return out
+
+
+def test_a_compact_structure_expands_to_the_same_tree_and_is_small() -> None:
+    from viewer_machines import big_machine, demo_machine
+
+    for machine in (big_machine(), demo_machine()[0], machine_of_steps(300)):
+        tree = snapshot(machine).to_dict()
+        data = compact(tree)
+        assert sorted_edges(expand(json.loads(json.dumps(data)), tree["path"])) == sorted_edges(
+            tree
+        )
+    tree = snapshot(machine_of_steps(300)).to_dict()
+    assert len(json.dumps(compact(tree))) * 10 < len(json.dumps(tree))
+    assert structure_of({"kind": "structure", "structure": tree}) == tree
+
+
+def machine_of_steps(n: int) -> smach.StateMachine:
+    """A chain of n identical nested steps, like a compiled plan."""
+    sm = smach.StateMachine(outcomes=["done", "failed"])
+    for i in range(n):
+        step = smach.StateMachine(outcomes=["ok", "failed"])
+        step.add("TRY", ScriptedState(["ok", "failed"]), transitions={"ok": "CHECK"})
+        step.add("CHECK", ScriptedState(["ok", "failed"]))
+        following = f"S{i + 1:04d}" if i + 1 < n else "done"
+        sm.add(f"S{i:04d}", step, transitions={"ok": following})
+    return sm

@@ -56,6 +56,7 @@ def test_no_two_edge_labels_overlap(build: object) -> None:
 
 def test_no_two_edge_labels_of_a_planned_mission_overlap(tmp_path: Path) -> None:
     from plan_bridge.cli import main
+    from smach.introspection.compact import structure_of
     from smach.introspection.journal import read_journal
     from smach.introspection.model import graft
 
@@ -66,5 +67,5 @@ def test_no_two_edge_labels_of_a_planned_mission_overlap(tmp_path: Path) -> None
     tree = header["structure"]
     for record in records:
         if record["kind"] == "structure":
-            tree = graft(tree, record["structure"], record["path"])
+            tree = graft(tree, structure_of(record), record["path"])
             assert overlapping_labels(layout(StateNode.from_dict(tree))) == []

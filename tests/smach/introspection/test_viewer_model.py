@@ -201,6 +201,8 @@ def test_export_view_refuses_unknown_formats_and_missing_structures() -> None:
 def test_journal_writes_a_structure_record_when_the_tree_grows(tmp_path: Path) -> None:
     from viewer_machines import Trivial
 
+    from smach.introspection.compact import structure_of
+
     sm = smach.StateMachine(outcomes=["done"])
     with sm:
         smach.StateMachine.add("A", Trivial(), transitions={"done": "done"})
@@ -214,7 +216,7 @@ def test_journal_writes_a_structure_record_when_the_tree_grows(tmp_path: Path) -
     header, records = read_journal(path)
     kinds = [r["kind"] for r in records]
     assert kinds.count("structure") == 1
-    structure = records[kinds.index("structure")]["structure"]
+    structure = structure_of(records[kinds.index("structure")])
     assert [c["label"] for c in structure["children"]] == ["A", "B"]
     view = fold(header, records)
     assert view.structure_version == 1
