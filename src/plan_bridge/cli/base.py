@@ -179,4 +179,5 @@ def check_input(domain: Path, problem: Path) -> list[str]:
 
     front = analyse_files(domain, problem)
     front.require_engines()
-    return front.warnings
+    # Printed as "warning: FILE:LINE:COL: ...": the word once, in front.
+    return [w.replace(": warning: ", ": ", 1) for w in front.warnings]
