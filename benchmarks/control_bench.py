@@ -6,11 +6,14 @@ Usage::
     .venv/bin/python benchmarks/control_bench.py --quick          # a few seconds
     .venv/bin/python benchmarks/control_bench.py --before REV     # compare with REV
 
-The hook is one ``bus.control`` load per transition (smach/control.py). To measure
-it, the ``StateMachine`` of a commit *before* the hook (``--before``, default: the
-parent of the commit that added it) is loaded from git into this process next to
-the current one, and the same 1000-state chain of trivial states (the ``chain``
-scenario of core_bench.py) is built with each. Trials alternate between the two
+On an unobserved step, the hook is the test ``if observed and control is not None``
+after a state returns (smach/state_machine.py; a controller makes its tree observed,
+so ``bus.control`` is read only on observed steps). To measure it, the working
+tree's ``StateMachine`` is loaded twice into this process: as it is, and with that
+test replaced by ``False`` (which Python compiles away, leaving the machine as if
+the hook were never written); ``--before REV`` loads the file of a commit instead.
+The same 1000-state chain of trivial states (the ``chain`` scenario of
+core_bench.py) is built with each. Trials alternate between the two
 (round-robin, gc disabled while timing) so that drift of a shared machine hits
 both alike; the table gives the median us/transition of each and their ratio. A
 third column runs the current machine with a controller attached and running (no
@@ -34,7 +37,7 @@ import smach
 from smach.control import Controller
 
 ROOT = Path(__file__).resolve().parents[1]
-HOOK_COMMIT = "82a1381"  # "control: container hooks ..." (issue 18)
+HOOK_TEST = "observed and control is not None"
 
 
 class Trivial(smach.State):
@@ -45,14 +48,19 @@ class Trivial(smach.State):
         return "done"
 
 
-def load_state_machine(rev: str | None) -> type[smach.StateMachine]:
-    """``StateMachine`` as it was at ``rev`` (None: the working tree's), loaded anew.
+def load_state_machine(rev: str | None, *, strip: bool = False) -> type[smach.StateMachine]:
+    """``StateMachine`` at ``rev`` (None: the working tree's), loaded anew.
 
-    Both sides are loaded the same way (a fresh module from a temporary file), so
-    neither gets an advantage from where its code objects live.
+    ``strip`` replaces the hook's test by ``False``. Both sides are loaded the same
+    way (a fresh module from a temporary file), so neither gets an advantage from
+    where its code objects live.
     """
     if rev is None:
         text = (ROOT / "src" / "smach" / "state_machine.py").read_text(encoding="utf-8")
+        if strip:
+            if HOOK_TEST not in text:
+                raise SystemExit(f"the hook's test {HOOK_TEST!r} is not in state_machine.py")
+            text = text.replace(HOOK_TEST, "False")
     else:
         text = subprocess.run(
             ["git", "show", f"{rev}:src/smach/state_machine.py"],
@@ -69,8 +77,6 @@ def load_state_machine(rev: str | None) -> type[smach.StateMachine]:
     spec.loader.exec_module(module)
     Path(handle.name).unlink()
     cls: type[smach.StateMachine] = module.StateMachine
-    if rev is not None and "bus.control" in text:
-        raise SystemExit(f"{rev} already has the control hook; pass an older --before")
     return cls
 
 
@@ -102,28 +108,35 @@ def trial(sm: smach.StateMachine, n: int, min_s: float) -> float:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="fewer, shorter trials")
-    parser.add_argument("--before", default=f"{HOOK_COMMIT}^", help="a commit without the hook")
+    parser.add_argument(
+        "--before", default=None, help="a commit to compare with (default: the hook compiled out)"
+    )
     parser.add_argument("--states", type=int, default=1000)
     args = parser.parse_args()
     trials, min_s = (7, 0.05) if args.quick else (31, 0.2)
     n = args.states
-    before = chain(load_state_machine(args.before), n)
+    before = chain(load_state_machine(args.before, strip=args.before is None), n)
+    # The same code as `before`, loaded again: the spread between the two is the noise.
+    twin = chain(load_state_machine(args.before, strip=args.before is None), n)
     now = chain(load_state_machine(None), n)
     controlled = chain(load_state_machine(None), n)
     ctl = Controller(controlled)
-    samples: dict[str, list[float]] = {"before": [], "now": [], "controlled": []}
-    machines = {"before": before, "now": now, "controlled": controlled}
+    machines = {"before": before, "twin": twin, "now": now, "controlled": controlled}
+    samples: dict[str, list[float]] = {name: [] for name in machines}
     order = list(machines)
     for t in range(trials):
-        for name in order[t % 3 :] + order[: t % 3]:  # rotate who goes first
+        for name in order[t % 4 :] + order[: t % 4]:  # rotate who goes first
             samples[name].append(trial(machines[name], n, min_s))
     ctl.close()
     med = {name: statistics.median(values) for name, values in samples.items()}
     ratios = [b / a for a, b in zip(samples["before"], samples["now"], strict=True)]
+    noise = [b / a for a, b in zip(samples["before"], samples["twin"], strict=True)]
     print(f"chain of {n} trivial states, {trials} interleaved trials of >= {min_s} s each")
-    print(f"python {sys.version.split()[0]}, before = {args.before}")
+    what = args.before or "the working tree with the hook's test compiled out"
+    print(f"python {sys.version.split()[0]}, before = {what}")
     print(f"{'machine':<34}{'us/transition (median)':>24}")
     print(f"{'before the hook':<34}{med['before']:>24.4f}")
+    print(f"{'before the hook, loaded again':<34}{med['twin']:>24.4f}")
     print(f"{'with the hook, no control':<34}{med['now']:>24.4f}")
     print(f"{'with a controller attached':<34}{med['controlled']:>24.4f}")
     ratio = statistics.median(ratios)
@@ -131,6 +144,8 @@ def main() -> None:
         f"hook cost, no control: {100 * (med['now'] / med['before'] - 1):+.1f}% (ratio of medians)"
     )
     print(f"hook cost, no control: {100 * (ratio - 1):+.1f}% (median of per-trial ratios)")
+    spread = statistics.median(noise)
+    print(f"noise (same code twice): {100 * (spread - 1):+.1f}% (median of per-trial ratios)")
     print(
         f"control in use (attached, running): {100 * (med['controlled'] / med['before'] - 1):+.1f}%"
     )
