@@ -4,7 +4,7 @@ Containers share five mechanisms, implemented here once:
 
 * construction: ``with container:`` opens it on a per-thread construction stack so
   that class-level calls (``StateMachine.add(...)``) act on it; instance calls
-  (``sm.add(...)``) act on that instance;
+  (``sm.add(...)``) act on that instance (the stack: :mod:`smach.construction`);
 * the run protocol: :meth:`Container.execute` is the same for every container
   (compile once, refuse a second concurrent run, begin, started event, the
   container's own loop :meth:`Container._run`, terminated event, output keys,
@@ -28,13 +28,12 @@ docs/containers.md.
 from __future__ import annotations
 
 import contextlib
-import functools
 import threading
-import types
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
-from typing import Any, ClassVar, Concatenate, Generic, ParamSpec, TypeVar
+from typing import Any, ClassVar, TypeVar
 
 import smach as _smach
+from smach.construction import _construction, _label_problem, construction_method
 from smach.container_events import ContainerEvents
 from smach.exceptions import (
     InvalidConstructionError,
@@ -55,55 +54,6 @@ __all__ = ["Container", "construction_method"]
 _current_thread = threading.current_thread
 
 C = TypeVar("C", bound="Container")
-P = ParamSpec("P")
-R = TypeVar("R")
-
-
-class _ConstructionStack(threading.local):
-    def __init__(self) -> None:
-        self.stack: list[Container] = []
-
-
-_construction = _ConstructionStack()
-
-
-class construction_method(Generic[C, P, R]):  # noqa: N801  (reads like a decorator)
-    """A method that, called on the class, acts on the currently open container.
-
-    ``StateMachine.add(...)`` inside ``with sm:`` adds to ``sm``; ``sm.add(...)`` adds
-    to ``sm`` whether or not it is open.
-    """
-
-    def __init__(self, fn: Callable[Concatenate[C, P], R]) -> None:
-        self._fn = fn
-        functools.update_wrapper(self, fn)  # type: ignore[arg-type]
-        # The class-level callable of each owner class, built once (building one per
-        # call would cost a functools.wraps per added state).
-        self._on_class: dict[type[C], Callable[P, R]] = {}
-
-    def __get__(self, obj: C | None, objtype: type[C] | None = None) -> Callable[P, R]:
-        fn = self._fn
-        if obj is not None:
-            return types.MethodType(fn, obj)
-        assert objtype is not None
-        on_class = self._on_class.get(objtype)
-        if on_class is None:
-            owner = objtype
-
-            @functools.wraps(fn)
-            def on_open_container(*args: P.args, **kwargs: P.kwargs) -> R:
-                return fn(owner._currently_opened_container(), *args, **kwargs)
-
-            on_class = self._on_class[objtype] = on_open_container
-        return on_class
-
-
-def _label_problem(label: object) -> str | None:
-    if not isinstance(label, str) or not label:
-        return f"a state label must be a non-empty string, got {label!r}"
-    if "/" in label:
-        return f"state label {label!r} must not contain '/' (it separates path segments)"
-    return None
 
 
 class Container(ContainerEvents, State):
