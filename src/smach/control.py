@@ -441,7 +441,9 @@ class Controller:
     # -- the containers' hooks ---------------------------------------------------------------
     def enter(self, container: State, path: str, state: State) -> None:
         """Called by ``container`` before it starts ``state`` (at ``path``); may block."""
-        with self._cond:
+        # The lock itself (C), not the Condition's Python-level __enter__: this runs on
+        # every step of a controlled tree. It is the Condition's lock.
+        with self._lock:
             self._forced.pop(path, None)  # a force that missed an earlier run of this path
             if self._closed or not (self._paused or self._breakpoints):
                 self._running[path] = state
@@ -461,7 +463,7 @@ class Controller:
 
     def leave(self, path: str, state: State, outcome: str | None) -> str | None:
         """Called by the container after ``state`` returned ``outcome``; returns the outcome to take."""
-        with self._cond:
+        with self._lock:
             self._running.pop(path, None)
             forced = self._forced.pop(path, None)
             if forced is None:
