@@ -490,3 +490,11 @@ def test_every_control_action_is_journaled_with_what_where_and_when(tmp_path: Pa
     exited_a = next(r for r in records if r["kind"] == "state_exited" and r["path"] == "/ROOT/A")
     assert exited_a["time"] <= control[1]["time"] <= control[2]["time"]
     assert all(isinstance(r["wall"], float) and r["thread"] for r in control)
+
+
+def test_the_example_in_the_docs_is_the_example_that_runs() -> None:
+    root = Path(__file__).resolve().parents[2]
+    example = (root / "examples" / "runtime_control.py").read_text(encoding="utf-8")
+    docs = (root / "docs" / "control.md").read_text(encoding="utf-8")
+    code = example.split('"""\n\n', 1)[1]
+    assert f"```python\n{code}```" in docs
