@@ -399,6 +399,14 @@ def _term(ctx: _Context, arg: Atom, scope: Mapping[str, str]) -> str | None:
     if arg.text.startswith("?"):
         if arg.text in scope:
             return scope[arg.text]
+        if ctx.where == "(:init ...)":
+            ctx.diags.error(
+                ctx.source,
+                arg.offset,
+                f"variable {arg.text} in (:init ...): initial facts are ground",
+                "name an object instead",
+            )
+            return None
         ctx.diags.error(
             ctx.source,
             arg.offset,

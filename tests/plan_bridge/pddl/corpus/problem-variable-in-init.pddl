@@ -1,5 +1,5 @@
 ;; verdict: error
-;; message: undeclared variable ?v
+;; message: variable ?v in (:init ...): initial facts are ground
 ;; where: problem
 ;; line: 12
 (define (problem deliver-one)
