@@ -28,11 +28,19 @@ def _configure_view(parser: argparse.ArgumentParser) -> None:
     )
     add_moment(parser)
     parser.add_argument("-o", "--output", metavar="FILE", help="with --export: write to FILE")
+    parser.add_argument(
+        "--check",
+        action="store_true",
+        help="check that the journal tells what happened (every event in the structure in "
+        "force, structures written when machines start, replay at every event) and exit",
+    )
 
 
 def _view(args: argparse.Namespace) -> int:
     from smach.introspection.cli import run_export, run_view
 
+    if args.check:
+        return _check(args.journal)
     if args.export:
         args.format = args.export
         return run_export(args, prog="plan-bridge")
@@ -41,6 +49,22 @@ def _view(args: argparse.Namespace) -> int:
 
         return fail("--at, --event and --output go with --export")
     return run_view(args, prog="plan-bridge")
+
+
+def _check(path: str) -> int:
+    from plan_bridge.cli.base import EXIT_FAILED, EXIT_OK, fail
+    from smach.introspection.fidelity import journal_problems
+
+    try:
+        problems = journal_problems(path)
+    except (OSError, ValueError) as exc:
+        return fail(f"{path}: cannot read the journal: {exc}")
+    for problem in problems:
+        print(f"{path}: {problem}")
+    if problems:
+        return EXIT_FAILED
+    print(f"{path}: OK (every event in the structure in force; replay exact at every event)")
+    return EXIT_OK
 
 
 def _configure_export(parser: argparse.ArgumentParser) -> None:

@@ -86,7 +86,12 @@ def journal_problems(path: str | os.PathLike[str], *, every: int = 1) -> list[st
                 ),
                 None,
             )
-            if started is None or started.get("time") != record.get("time"):
+            if "path" not in record:
+                problems.append(
+                    f"record {n}: a structure of the whole tree, read when a new path was met "
+                    f"(an older journal): it may show a later machine than the one that ran"
+                )
+            elif started is None or started.get("time") != record.get("time"):
                 problems.append(
                     f"record {n}: the structure of {record.get('path')} was not written "
                     f"when it started"

@@ -56,3 +56,23 @@ def test_every_event_of_a_mission_journal_refers_to_the_structure_in_force_and_r
     ]
     assert [r["path"] for r in structures] == ["/ROOT/PLAN"] * len(plan_starts)
     assert [r["time"] for r in structures] == [r["time"] for r in plan_starts]
+
+
+@pytest.mark.timeout(120)
+def test_view_check_accepts_a_faithful_journal_and_names_what_is_wrong_in_another(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    journal = tmp_path / "run.jsonl"
+    main(["run", str(DOMAINS / "fetch_drink"), "--seed", "1", "--journal", str(journal),
+          "--quiet"])  # fmt: skip
+    capsys.readouterr()
+    assert main(["view", str(journal), "--check"]) == 0
+    assert "OK" in capsys.readouterr().out
+    # Without the structure of the second plan, its events refer to states not drawn.
+    lines = journal.read_text().splitlines(keepends=True)
+    second = [i for i, line in enumerate(lines) if '"kind": "structure"' in line][1]
+    broken = tmp_path / "broken.jsonl"
+    broken.write_text("".join(lines[:second] + lines[second + 1 :]))
+    assert main(["view", str(broken), "--check"]) == 1
+    out = capsys.readouterr().out
+    assert "which the structure in force does not have" in out
