@@ -133,6 +133,8 @@ def _paced_class(cls: type) -> type:
                 (cls,),
                 {
                     "sim_time": property(get_time, set_time),
+                    # Saved through sim_time; the pacer is a connection (see SimulatedWorld).
+                    "wiring": ("_pacer", "_paced_sim_time"),
                     "__doc__": f"{cls.__name__} whose clock advances in wall time (pacing.py).",
                     "__module__": cls.__module__,
                 },
