@@ -158,7 +158,9 @@ def _run_command(args: argparse.Namespace) -> int:
     for target in args.targets:
         authoring += authoring_cost(str(target), args.problem)
         fault_models[Path(target).name] = fault_model(str(target), args.problem)
-    command = "plan-bridge study " + " ".join(sys.argv[2:] if len(sys.argv) > 2 else args.targets)
+    # The command that produces these rows: --resume only says how they were collected.
+    argv = [a for a in (sys.argv[2:] if len(sys.argv) > 2 else args.targets) if a != "--resume"]
+    command = "plan-bridge study " + " ".join(argv)
     report = write_report(rows, out, authoring, command, fault_models=fault_models)
     errors = sum(1 for r in rows if r["outcome"] in ("error", "timeout", "crashed"))
     print(f"{len(rows)} runs ({errors} errors); report: {report}", file=sys.stderr)

@@ -196,6 +196,10 @@ def _num(value: Any, fmt: str) -> str:
     return NA if value == NA else format(value, fmt)
 
 
+def _seconds(value: Any, fmt: str) -> str:
+    return NA if value == NA else f"{format(value, fmt)} s"
+
+
 def _ranges(values: list[int]) -> str:
     """0,1,2,3,7 -> '0-3, 7'."""
     spans: list[list[int]] = []
@@ -406,9 +410,9 @@ def _findings(summary: list[dict[str, Any]], authoring: list[dict[str, Any]]) ->
         if planned and scripted:
             out.append(
                 f"  Median wall time of successful runs: planned "
-                f"{_num(planned['median_wall_time_s'], '.2f')} s "
+                f"{_seconds(planned['median_wall_time_s'], '.2f')} "
                 f"({planned['planning_share'] * 100:.0f}% of all planned runs' time is planning), "
-                f"scripted {_num(scripted['median_wall_time_s'], '.3f')} s."
+                f"scripted {_seconds(scripted['median_wall_time_s'], '.3f')}."
             )
     costs: dict[str, dict[str, dict[str, Any]]] = defaultdict(dict)
     for a in authoring:
