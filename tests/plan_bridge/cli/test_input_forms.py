@@ -1,0 +1,74 @@
+"""Every command takes FOLDER [--problem P] and DOMAIN PROBLEM, with one verdict."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from plan_bridge.cli import main
+
+DATA = Path(__file__).parents[1] / "data" / "rooms"
+DOMAIN = DATA / "domain.pddl"
+PROBLEM = DATA / "problems" / "p01.pddl"
+
+
+@pytest.mark.timeout(120)
+@pytest.mark.parametrize(
+    "target",
+    [[str(DATA)], [str(DATA), "--problem", "p01"], [str(DOMAIN), str(PROBLEM)]],
+    ids=["folder", "folder-problem-name", "domain-problem"],
+)
+def test_plan_takes_a_folder_or_a_domain_and_a_problem(
+    target: list[str], capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["plan", *target, "--json"]) == 0
+    payload = json.loads(capsys.readouterr().out)
+    assert payload["status"] == "solved"
+    assert Path(payload["problem"]).name == "p01.pddl"
+
+
+@pytest.mark.timeout(120)
+def test_check_and_run_take_a_domain_and_a_problem_file(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    assert main(["check", str(DOMAIN), str(PROBLEM)]) == 0
+    assert "OK (1 problem(s) checked)" in capsys.readouterr().out
+    assert main(["run", str(DOMAIN), str(PROBLEM), "--quiet", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["goal_reached"] is True
+
+
+def test_two_different_problems_are_a_bad_input_error(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    other = DATA / "problems" / "p02.pddl"
+    for command in ("check", "plan", "run"):
+        assert main([command, str(DOMAIN), str(PROBLEM), "--problem", str(other)]) == 2
+        assert "two problems given" in capsys.readouterr().err
+
+
+def test_a_domain_file_without_a_problem_is_the_same_error_for_every_command(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    messages = []
+    for command in ("check", "plan", "run"):
+        assert main([command, str(DOMAIN)]) == 2
+        messages.append(capsys.readouterr().err)
+    assert messages[0] == messages[1] == messages[2]
+    assert "a domain file needs a problem file" in messages[0]
+
+
+def test_a_problem_of_another_domain_is_refused_by_every_command(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    problem = tmp_path / "p.pddl"
+    text = PROBLEM.read_text()
+    name = text.split("(:domain", 1)[1].split(")", 1)[0].strip()
+    problem.write_text(text.replace(f"(:domain {name})", "(:domain elsewhere)"))
+    messages = []
+    for command in ("check", "plan", "run"):
+        assert main([command, str(DOMAIN), str(problem)]) == 2
+        messages.append(capsys.readouterr().err)
+    assert messages[0] == messages[1] == messages[2]
+    assert f"{problem}:" in messages[0] and "this problem is for domain 'elsewhere'" in messages[0]
