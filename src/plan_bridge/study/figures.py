@@ -211,7 +211,8 @@ def _times(
                     )
             ax.set_ylabel(ylabel, fontsize=8)
             if column == "wall_time_s":
-                ax.set_yscale("log")
+                if any(_float(r[column]) > 0 for items in cell.values() for r in items):
+                    ax.set_yscale("log")
                 ax.set_xlabel("fault rate")
             else:
                 ax.set_title(_panel_title(target, variant), fontsize=10)
@@ -291,8 +292,11 @@ def _planning(
     ax.set_title("Where faults were absorbed", fontsize=10)
     ax.tick_params(axis="x", labelsize=8)
     ax.grid(axis="y", alpha=0.3)
-    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1), frameon=False)
-    axes[0].legend(fontsize=8, loc="upper left", bbox_to_anchor=(0, -0.18), ncol=3, frameon=False)
+    if planned:  # a study of scripted runs only has nothing to show here
+        ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1), frameon=False)
+        axes[0].legend(
+            fontsize=8, loc="upper left", bbox_to_anchor=(0, -0.18), ncol=3, frameon=False
+        )
     fig.tight_layout()
     _save(fig, out, "planning_share_and_absorption")
     return Figure(

@@ -167,3 +167,26 @@ def test_a_run_does_not_depend_on_the_hash_seed_of_the_study_process(tmp_path: P
         outputs.append(done.stdout)
     assert outputs[0] == outputs[1]
     assert "'succeeded'" in outputs[0]
+
+
+def test_a_report_of_one_approach_at_one_fault_rate_still_draws_every_plot(
+    tmp_path: Path,
+) -> None:
+    rows = [
+        dict.fromkeys(FIELDS, "0")
+        | {
+            "target": "rooms",
+            "variant": "",
+            "approach": "scripted",
+            "fault_rate": "0.2",
+            "seed": str(seed),
+            "outcome": "succeeded",
+            "goal_reached": "True",
+            "error": "",
+        }
+        for seed in range(3)
+    ]
+    text = write_report(rows, tmp_path, [], "plan-bridge study rooms").read_text()
+    for stem in ("success_vs_fault_rate", "time_per_run", "planning_share_and_absorption"):
+        assert (tmp_path / f"{stem}.png").stat().st_size > 0
+        assert f"({stem}.svg)" in text
