@@ -22,8 +22,8 @@ from dataclasses import dataclass, field
 import smach
 from plan_bridge.execution.events import ObservationsApplied, StepFinished
 from plan_bridge.execution.semantics import ActionModel, GroundAction
-from plan_bridge.execution.world import WorldState, normalise_observations
-from plan_bridge.pddl.task import Fact, format_fact
+from plan_bridge.execution.world import WorldState, describe_observation, normalise_observations
+from plan_bridge.pddl.task import Fact
 from plan_bridge.planning.planner import PlanStep
 from plan_bridge.skills.registry import (
     OBSERVATIONS_KEY,
@@ -139,7 +139,7 @@ class StepState(smach.Wrapper):
             self.belief.apply(adds, dels)
         changed = self.belief.observe(observations)
         record.observations_changed = tuple(
-            ("" if truth else "not ") + format_fact(fact) for fact, truth in changed
+            describe_observation(fact, truth) for fact, truth in changed
         )
         if changed and self._bus.listeners:
             t, thread = stamp()
@@ -176,7 +176,8 @@ class StepState(smach.Wrapper):
 class CompiledPlan:
     """A plan as a SMACH machine, with its step states in plan order."""
 
-    machine: smach.StateMachine
+    machine: smach.Container
+    """A StateMachine (sequential plans), or a TemporalDispatch (temporal plans)."""
     steps: list[PlanStep]
     labels: list[str]
     step_states: list[StepState]
@@ -194,10 +195,33 @@ def compile_plan(
     check_preconditions: bool = True,
     on_finished: Callable[[StepRecord], None] | None = None,
     variants: Mapping[int, str] | None = None,
+    time_scale: float = 0.0,
+    on_failure: str = "finish",
 ) -> CompiledPlan:
     """Build the SMACH machine that executes ``steps`` (numbered from ``first_index``);
-    ``variants`` maps a position in ``steps`` to the skill variant it runs."""
+    ``variants`` maps a position in ``steps`` to the skill variant it runs.
+
+    A temporal plan (steps with start times) becomes a
+    :class:`~plan_bridge.execution.temporal.TemporalDispatch` (``time_scale``: wall
+    seconds per plan second; ``on_failure``: ``finish`` or ``preempt`` the steps still
+    running when one fails); ``concurrent`` does not apply to it.
+    """
     steps = list(steps)
+    if steps and any(step.start is not None for step in steps):
+        from plan_bridge.execution.temporal import compile_temporal
+
+        return compile_temporal(
+            steps,
+            skills,
+            model,
+            belief,
+            first_index=first_index,
+            check_preconditions=check_preconditions,
+            on_finished=on_finished,
+            variants=variants,
+            time_scale=time_scale,
+            on_failure=on_failure,
+        )
     width = max(2, len(str(first_index + len(steps))))
     labels = [step_label(first_index + i, s, width) for i, s in enumerate(steps)]
     states: list[StepState] = []

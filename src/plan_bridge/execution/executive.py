@@ -78,11 +78,19 @@ class Executive(smach.Container):
         self.skills = skills
         self.planner = get_planner(planner) if isinstance(planner, str) else planner
         self.policy = policy or ReplanPolicy()
-        self.belief = belief if belief is not None else WorldState(task.initial_facts)
+        self.model = ActionModel(task)
+        self.belief = (
+            belief
+            if belief is not None
+            else WorldState(task.initial_facts, self.model.initial_values())
+        )
+        #: Temporal plans: wall seconds per plan second (0: start steps on events only)
+        #: and what happens to running steps when one fails (``finish`` or ``preempt``).
+        self.time_scale = 0.0
+        self.on_failure = "finish"
         self.sense = sense
         self.concurrent = concurrent
         self.check_preconditions = check_preconditions
-        self.model = ActionModel(task)
         #: Plans found per (state, goal); share one between executives of the same
         #: problem to reuse plans across missions (``ReplanPolicy.reuse_plans``).
         self.plan_cache = plan_cache if plan_cache is not None else PlanCache()
@@ -243,6 +251,8 @@ class Executive(smach.Container):
             concurrent=self.concurrent,
             check_preconditions=self.check_preconditions,
             on_finished=self._step_finished,
+            time_scale=self.time_scale,
+            on_failure=self.on_failure,
             variants=self._recovery.variants_of(plan) if self._recovery is not None else None,
         )
         self._compiled = compiled

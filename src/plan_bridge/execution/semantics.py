@@ -354,14 +354,26 @@ class GroundAction:
         return self._lifted.duration is not None
 
     def applicable(self, facts: Facts) -> bool:
-        """Whether the preconditions (at-start conditions) hold in ``facts``."""
+        """Whether the action can start in ``facts``: its preconditions hold (for a
+        durative action: the at-start conditions, and the over-all conditions in the
+        state its at-start effects make)."""
         b = self._binding
-        return all(cond(b, facts) for _, cond in self._lifted.precondition_parts)
+        if not all(cond(b, facts) for _, cond in self._lifted.precondition_parts):
+            return False
+        return not self._lifted.invariant_parts or not self.unmet_invariant(self._started(facts))
 
     def unmet_preconditions(self, facts: Facts) -> list[str]:
-        """The precondition parts that do not hold, as text with the arguments bound."""
+        """The precondition parts that do not hold, as text with the arguments bound
+        (over-all conditions that would not hold once started: ``over all: ...``)."""
         b = self._binding
-        return [text(b) for text, cond in self._lifted.precondition_parts if not cond(b, facts)]
+        unmet = [text(b) for text, cond in self._lifted.precondition_parts if not cond(b, facts)]
+        if self._lifted.invariant_parts:
+            unmet += [f"over all: {c}" for c in self.unmet_invariant(self._started(facts))]
+        return unmet
+
+    def _started(self, facts: Facts) -> Facts:
+        adds, dels, values = self.start_effects(facts)
+        return _after(facts, adds, dels, values) if adds or dels or values else facts
 
     def unmet_invariant(self, facts: Facts) -> list[str]:
         """The over-all conditions of a durative action that do not hold in ``facts``."""
@@ -634,6 +646,8 @@ class ActionModel:
 
     def check_plan(self, steps: Sequence[PlanStep], facts: Facts) -> PlanCheck:
         """Simulate ``steps`` from ``facts``: does every step apply and the goal hold?"""
+        if any(step.start is not None for step in steps):
+            return self._check_timed(steps, facts)
         state = _SimState(facts)  # one copy, updated in place: plans can be long, states big
         state.values = dict(values_of(facts))
         for index, step in enumerate(steps):
@@ -641,12 +655,63 @@ class ActionModel:
             if not ground.applicable(state):
                 unmet = tuple(ground.unmet_preconditions(state))
                 return PlanCheck(False, FactSnapshot(state, state.values), index, unmet)
+            if ground.durative and ground._lifted.end_parts:
+                # Sequentially, the end follows the start at once: the at-end
+                # conditions must hold in the state the start effects make.
+                middle = ground._started(state)
+                unmet = tuple(f"at end: {c}" for c in ground.unmet_at_end(middle))
+                if unmet:
+                    return PlanCheck(False, FactSnapshot(state, state.values), index, unmet)
             adds, dels, values = ground.all_effects(state)
             state -= dels
             state |= adds
             state.values.update(values)
         reached = self.goal_holds(state)
         return PlanCheck(reached, FactSnapshot(state, state.values), None, (), reached)
+
+    def _check_timed(self, steps: Sequence[PlanStep], facts: Facts) -> PlanCheck:
+        """Simulate a temporal plan on its timeline: start and end points in time order
+        (an end before a start at the same instant); at each point its conditions are
+        checked and its effects applied, and after every point the over-all
+        conditions of the actions then running."""
+        points = []
+        for index, step in enumerate(steps):
+            start = step.start or 0.0
+            points.append((round(start, 6), 1, index, "start"))
+            if self.ground(step).durative:
+                points.append((round(start + (step.duration or 0.0), 6), 0, index, "end"))
+        points.sort()
+        ends = {index: at for at, kind, index, _ in points if kind == 0}
+        state: Facts = FactSnapshot(facts, values_of(facts))
+        running: set[int] = set()
+        for position, (now, _, index, point) in enumerate(points):
+            ground = self.ground(steps[index])
+            if point == "start":
+                unmet = tuple(
+                    text(ground._binding)
+                    for text, cond in ground._lifted.precondition_parts
+                    if not cond(ground._binding, state)
+                )
+                effects = ground.start_effects(state)
+                running.add(index)
+            else:
+                unmet = tuple(f"at end: {c}" for c in ground.unmet_at_end(state))
+                effects = ground.end_effects(state)
+                running.discard(index)
+            if unmet:
+                return PlanCheck(False, FactSnapshot(state, values_of(state)), index, unmet)
+            state = _after(state, *effects)
+            if position + 1 < len(points) and points[position + 1][0] == now:
+                continue  # the invariants hold between instants: finish this one first
+            for other in sorted(running):
+                if ends.get(other, now) <= now:
+                    continue
+                broken = self.ground(steps[other]).unmet_invariant(state)
+                if broken:
+                    unmet = tuple(f"over all: {c}" for c in broken)
+                    return PlanCheck(False, FactSnapshot(state, values_of(state)), other, unmet)
+        reached = self.goal_holds(state)
+        return PlanCheck(reached, FactSnapshot(state, values_of(state)), None, (), reached)
 
     def regress(self, steps: Sequence[PlanStep]) -> frozenset[Fact] | None:
         """Atoms that must hold before ``steps`` for them to reach the goal (STRIPS only).

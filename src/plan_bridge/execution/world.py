@@ -15,14 +15,22 @@ from __future__ import annotations
 
 import contextlib
 import threading
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from typing import Any
 
-from plan_bridge.pddl.task import Fact, FactLike, parse_fact
+from plan_bridge.pddl.task import Fact, FactLike, format_fact, parse_fact
 
-__all__ = ["FactSnapshot", "Observation", "WorldState", "normalise_observations", "values_of"]
+__all__ = [
+    "FactSnapshot",
+    "Observation",
+    "WorldState",
+    "describe_observation",
+    "normalise_observations",
+    "values_of",
+]
 
-Observation = tuple[Fact, bool]
+Observation = tuple[Fact, "bool | float"]
+"""A fact seen true or false, or a numeric atom seen with a value (``(battery r1)``, 42.0)."""
 _NO_VALUES: Mapping[Fact, float] = {}
 
 
@@ -54,7 +62,8 @@ def values_of(facts: object) -> Mapping[Fact, float]:
 def normalise_observations(value: Any) -> list[Observation]:
     """Accept observations as a mapping {fact: bool} or pairs [(fact, bool), ...].
 
-    Facts may be tuples or PDDL text ``"(at cup table)"``.
+    Facts may be tuples or PDDL text ``"(at cup table)"``; a numeric atom is
+    observed with a number instead of true/false: ``{"(battery r1)": 42.0}``.
     """
     if value is None:
         return []
@@ -68,10 +77,20 @@ def normalise_observations(value: Any) -> list[Observation]:
                 f"observation {item!r} is not a (fact, true/false) pair; report observations "
                 f"as {{'(at cup table)': True}} or [('(at cup table)', True)]"
             ) from exc
-        if not isinstance(truth, bool):
-            raise ValueError(f"observation {item!r}: the truth value must be True or False")
-        out.append((parse_fact(fact), truth))
+        if not isinstance(truth, (bool, int, float)):
+            raise ValueError(
+                f"observation {item!r}: the value must be True or False (a fact) or a "
+                f"number (a numeric fluent such as (battery r1))"
+            )
+        out.append((parse_fact(fact), truth if isinstance(truth, bool) else float(truth)))
     return out
+
+
+def describe_observation(fact: Fact, value: bool | float) -> str:
+    """``(at cup table)``, ``not (at cup table)`` or ``(battery r1) = 42``."""
+    if isinstance(value, bool):
+        return ("" if value else "not ") + format_fact(fact)
+    return f"{format_fact(fact)} = {value:g}"
 
 
 class WorldState:
@@ -84,6 +103,7 @@ class WorldState:
         self._facts.values = dict(values if values is not None else values_of(facts))
         self._lock = threading.Lock()
         self.version = 0
+        self._listeners: list[Callable[[], None]] = []
 
     @property
     def facts(self) -> FactSnapshot:
@@ -104,12 +124,27 @@ class WorldState:
         with self._lock:
             self._facts.values.update(values)
             self.version += 1
+        self._changed()
 
     @contextlib.contextmanager
     def locked(self) -> Iterator[set[Fact]]:
         """The live set of facts, locked: read it inside the ``with`` block only."""
         with self._lock:
             yield self._facts
+
+    def add_listener(self, listener: Callable[[], None]) -> None:
+        """Call ``listener()`` after every change (from the changing thread, unlocked):
+        how a running durative action watches its over-all conditions without polling."""
+        with self._lock:
+            self._listeners = [*self._listeners, listener]
+
+    def remove_listener(self, listener: Callable[[], None]) -> None:
+        with self._lock:
+            self._listeners = [cb for cb in self._listeners if cb is not listener]
+
+    def _changed(self) -> None:
+        for listener in self._listeners:  # a copy-on-write list: no lock needed
+            listener()
 
     def holds(self, fact: FactLike) -> bool:
         return parse_fact(fact) in self._facts
@@ -120,12 +155,18 @@ class WorldState:
             self._facts.difference_update(deletes)
             self._facts.update(adds)
             self.version += 1
+        self._changed()
 
     def observe(self, observations: Iterable[Observation]) -> list[Observation]:
         """Record observations; returns those that changed the belief."""
         changed: list[Observation] = []
         with self._lock:
             for fact, truth in observations:
+                if not isinstance(truth, bool):
+                    if self._facts.values.get(fact) != truth:
+                        changed.append((fact, truth))
+                        self._facts.values[fact] = truth
+                    continue
                 if (fact in self._facts) != truth:
                     changed.append((fact, truth))
                     if truth:
@@ -134,6 +175,8 @@ class WorldState:
                         self._facts.discard(fact)
             if changed:
                 self.version += 1
+        if changed:
+            self._changed()
         return changed
 
     def replace(self, facts: Iterable[Fact], values: Mapping[Fact, float] | None = None) -> None:
@@ -145,6 +188,7 @@ class WorldState:
             self._facts = _LiveFacts(facts)
             self._facts.values = dict(given) if given or values is not None else kept
             self.version += 1
+        self._changed()
 
     def __contains__(self, fact: object) -> bool:
         return fact in self._facts

@@ -337,6 +337,9 @@ class UPPlanner:
         if timeout <= 0:
             raise ValueError(f"timeout must be positive, got {timeout!r}")
         started = time.monotonic()
+        if values is None and isinstance(getattr(initial_state, "values", None), Mapping):
+            # A belief's snapshot carries its numbers (plan_bridge.execution.world).
+            values = initial_state.values  # type: ignore[union-attr]
         facts = (
             None
             if initial_state is None
@@ -444,7 +447,7 @@ class UPPlanner:
                 engine_time_s=reply.engine_time_s,
             )
         if reply.outcome == "result" and reply.status.startswith("UNSOLVABLE"):
-            report = relaxed_unreachable_goals(task, timeout=self.explain_timeout)
+            report = _unreachable(task, self.explain_timeout)
             verdict = (
                 f"{self._engine} proved that no plan exists"
                 if reply.status == "UNSOLVABLE_PROVEN"
@@ -459,7 +462,7 @@ class UPPlanner:
             if reply.outcome == "timeout":
                 verdict += " (the planner process was killed)"
             # A quick look may still prove the goal unreachable: then say so.
-            report = relaxed_unreachable_goals(task, timeout=min(1.0, self.explain_timeout))
+            report = _unreachable(task, min(1.0, self.explain_timeout))
             status = PlanStatus.UNSOLVABLE if report.unreachable_goals else PlanStatus.TIMEOUT
             return self._no_plan(task, started, status, verdict, report, notes, missing, reply)
         if reply.outcome == "crashed":
@@ -573,6 +576,14 @@ class UPPlanner:
 
 
 _cache_lock = threading.Lock()
+
+
+def _unreachable(task: PlanningTask, timeout: float) -> ReachabilityReport:
+    """The delete-relaxation analysis of a "no plan"; nothing is claimed for problems
+    it does not model (durative actions: their conditions are split in time)."""
+    if any(hasattr(action, "duration") for action in task.problem.actions):
+        return ReachabilityReport(complete=False)
+    return relaxed_unreachable_goals(task, timeout=timeout)
 
 
 def _lacking(engine_name: str, task: PlanningTask) -> list[str]:

@@ -74,11 +74,17 @@ def action_topic(prefix: str, action: str) -> str:
     return f"{prefix.rstrip('/')}/{name}"
 
 
-def encode_result(ok: bool, observations: Iterable[tuple[Fact, bool]], detail: str = "") -> str:
+def encode_result(
+    ok: bool, observations: Iterable[tuple[Fact, bool | float]], detail: str = ""
+) -> str:
+    # A numeric fluent's reading (a number) is passed on as a number.
     return json.dumps(
         {
             "outcome": "succeeded" if ok else "aborted",
-            "observations": [[format_fact(fact), bool(truth)] for fact, truth in observations],
+            "observations": [
+                [format_fact(fact), truth if isinstance(truth, bool) else float(truth)]
+                for fact, truth in observations
+            ],
             "detail": detail,
         }
     )

@@ -1,0 +1,646 @@
+"""Temporal plans as SMACH: one dispatcher container, actions started on events.
+
+A time-triggered plan (each step with a planned ``start`` and ``duration``) compiles
+into a :class:`TemporalDispatch`: a ``smach`` container whose children are
+:class:`TimedStepState` steps, run concurrently in their own threads, like a
+Concurrence whose children start at different times.
+
+**When a step starts.** Before the run, the plan is turned into a simple temporal
+network over the steps' start and end points (:func:`precedence`): a step *depends*
+on an earlier one when one writes an atom (or a number) the other reads or writes.
+A dependent step waits for the earlier step's **end** when the plan starts it after
+that end, else for its **start** (the two overlap in the plan); in both cases it also
+waits the planned lag between those points, times ``time_scale`` (wall seconds per
+plan second). With ``time_scale > 0`` no step starts before its planned time on the
+wall clock either (``t0 + start x time_scale``), so a simulated run plays the plan's
+timeline. A step whose predecessors have happened starts only when its at-start
+conditions hold in the belief; while other steps run it waits for them (the belief
+may still change), and when nothing runs it starts anyway and reports ``invalid``.
+So a late action delays its dependents instead of breaking them, and independent
+actions are not held up by it.
+
+**While a step runs.** At-start effects (and numeric ones) reach the belief when it
+starts; its over-all conditions are checked on every change of the belief (a belief
+listener, no polling) and a violation preempts its skill: the step ends ``aborted``
+naming the condition. When the skill succeeds, the at-end conditions are checked and
+the at-end effects applied, computed in the belief of that moment (a battery drained
+meanwhile by another action is decreased from its current value). Skills receive the
+planned duration in ``ud.duration`` (plan seconds) besides the usual step keys.
+
+**Failure.** The first step that ends other than ``succeeded`` stops new starts. The
+policy ``on_failure`` says what happens to the steps still running: ``"finish"``
+(default: their effects are real, a robot in the middle of a move completes it, and
+the belief stays consistent with what happened) or ``"preempt"``. The container then
+ends with that step's outcome, and the executive above validates, repairs or replans
+from the belief as for sequential plans.
+
+Events: every step emits :class:`ActionStarted` and :class:`ActionEnded` with its
+planned and actual (wall, since the dispatch began) times, on the same stream as
+every other event: journal, viewer timeline and study read the same records.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import smach
+from plan_bridge.execution.compile import (
+    STEP_OUTCOMES,
+    CompiledPlan,
+    StepRecord,
+    StepState,
+    step_label,
+)
+from plan_bridge.execution.semantics import ActionModel, GroundAction
+from plan_bridge.execution.world import WorldState, describe_observation, normalise_observations
+from plan_bridge.pddl.task import Fact
+from plan_bridge.planning.planner import PlanStep
+from plan_bridge.skills.registry import OBSERVATIONS_KEY, STEP_KEYS, SkillRegistry
+from smach.introspection.events import Event, stamp
+
+__all__ = [
+    "DURATION_KEY",
+    "ActionEnded",
+    "ActionStarted",
+    "Edge",
+    "TemporalDispatch",
+    "TimedStepState",
+    "compile_temporal",
+    "is_temporal",
+    "precedence",
+]
+
+#: Userdata key holding a step's planned duration (plan seconds) for its skill.
+DURATION_KEY = "duration"
+_TIMED_STEP_KEYS = (*STEP_KEYS, DURATION_KEY)
+#: Plan times closer than this are the same instant (engines separate by epsilon).
+EPSILON = 1e-6
+POLICIES = ("finish", "preempt")
+
+
+def is_temporal(steps: Sequence[PlanStep]) -> bool:
+    """Whether ``steps`` is a time-triggered plan (its steps carry start times)."""
+    return any(step.start is not None for step in steps)
+
+
+@dataclass(slots=True, kw_only=True)
+class ActionStarted(Event):
+    """A step of a temporal plan started (``path`` is the step's state)."""
+
+    kind: ClassVar[str] = "action_started"
+    index: int
+    action: str
+    planned_start: float
+    planned_duration: float
+    actual_start: float
+    """Wall seconds since the dispatch began."""
+
+
+@dataclass(slots=True, kw_only=True)
+class ActionEnded(Event):
+    """A step of a temporal plan ended (``path`` is the step's state)."""
+
+    kind: ClassVar[str] = "action_ended"
+    index: int
+    action: str
+    outcome: str
+    planned_start: float
+    planned_duration: float
+    actual_start: float
+    actual_end: float
+
+
+# -- the temporal network ------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Edge:
+    """Step ``after`` waits for the ``point`` (``start``/``end``) of step ``before``
+    and then ``lag`` plan seconds."""
+
+    before: int
+    after: int
+    point: str
+    lag: float
+
+
+class _Recorder(set[Fact]):
+    """A state that records which atoms and numbers a condition reads."""
+
+    def __init__(self, answer: bool) -> None:
+        super().__init__()
+        self.answer = answer
+        self.read: set[Fact] = set()
+        self.values = _RecordingValues(self.read)
+
+    def __contains__(self, fact: object) -> bool:
+        if isinstance(fact, tuple):
+            self.read.add(fact)
+        return self.answer
+
+
+class _RecordingValues(Mapping[Fact, float]):
+    def __init__(self, read: set[Fact]) -> None:
+        self.read = read
+
+    def __getitem__(self, key: Fact) -> float:
+        self.read.add(key)
+        return 1.0
+
+    def __iter__(self) -> Iterator[Fact]:
+        return iter(())
+
+    def __len__(self) -> int:
+        return 0
+
+
+def _footprint(ground: GroundAction) -> tuple[set[Fact], set[Fact]]:
+    """(atoms read, atoms written) by an action, numbers included (conservatively:
+    both outcomes of every test are explored once)."""
+    reads: set[Fact] = set()
+    writes: set[Fact] = set()
+    for answer in (True, False):
+        state = _Recorder(answer)
+        ground.applicable(state)
+        ground.unmet_preconditions(state)
+        ground.unmet_invariant(state)
+        ground.unmet_at_end(state)
+        adds, dels, values = ground.all_effects(state)
+        reads |= state.read
+        writes |= adds | dels | set(values)
+    return reads, writes
+
+
+def precedence(steps: Sequence[PlanStep], model: ActionModel) -> list[list[Edge]]:
+    """For each step, the edges it waits for (see the module documentation)."""
+    prints = [_footprint(model.ground(step)) for step in steps]
+    starts = [step.start or 0.0 for step in steps]
+    ends = [(step.start or 0.0) + (step.duration or 0.0) for step in steps]
+    order = sorted(range(len(steps)), key=lambda i: (starts[i], i))
+    waits: list[list[Edge]] = [[] for _ in steps]
+    for position, j in enumerate(order):
+        reads_j, writes_j = prints[j]
+        for i in order[:position]:
+            reads_i, writes_i = prints[i]
+            if not (writes_i & (reads_j | writes_j) or writes_j & reads_i):
+                continue
+            if starts[j] >= ends[i] - EPSILON:
+                waits[j].append(Edge(i, j, "end", max(0.0, starts[j] - ends[i])))
+            else:
+                waits[j].append(Edge(i, j, "start", max(0.0, starts[j] - starts[i])))
+    return waits
+
+
+# -- one durative step ---------------------------------------------------------------------
+
+
+@dataclass
+class Timing:
+    """Planned and actual times of one step (actual: wall seconds since dispatch)."""
+
+    planned_start: float
+    planned_duration: float
+    actual_start: float | None = None
+    actual_end: float | None = None
+
+
+class TimedStepState(StepState):
+    """A step of a temporal plan: at-start checks and effects when it starts, over-all
+    conditions watched while its skill runs, at-end checks and effects on success."""
+
+    def __init__(
+        self,
+        index: int,
+        ground: GroundAction,
+        belief: WorldState,
+        skill: Any,
+        *,
+        check_preconditions: bool = True,
+        on_finished: Callable[[StepRecord], None] | None = None,
+    ) -> None:
+        super().__init__(
+            index,
+            ground,
+            belief,
+            skill,
+            check_preconditions=check_preconditions,
+            on_finished=on_finished,
+        )
+        step = ground.step
+        self.timing = Timing(step.start or 0.0, step.duration or 0.0)
+        self.clock: Callable[[], float] = time.monotonic
+        self._violation: list[str] = []
+
+    def add(
+        self, label: str, state: smach.State, remapping: Mapping[str, str] | None = None
+    ) -> smach.State:
+        added = super(StepState, self).add(label, state, remapping)
+        remap = remapping or {}
+        # As StepState.add, with the planned duration provided here as well.
+        self.register_input_keys(
+            [
+                remap.get(k, k)
+                for k in state.get_registered_input_keys()
+                if k not in _TIMED_STEP_KEYS
+            ]
+        )
+        self.register_output_keys(
+            [remap.get(k, k) for k in state.get_registered_output_keys() if k != OBSERVATIONS_KEY]
+        )
+        return added
+
+    def run(self, child: smach.State, label: str) -> str:
+        record = StepRecord(self.index, self.ground.step)
+        self.record = record
+        self._violation = []
+        started = time.monotonic()
+        ground = self.ground
+        with self.belief.locked() as facts:
+            if self.check_preconditions and not ground.applicable(facts):
+                record.outcome = "invalid"
+                record.unmet = tuple(ground.unmet_preconditions(facts))
+                return self._finish(record, started)
+            adds, dels, values = ground.start_effects(facts)
+        self.belief.apply(adds, dels)
+        self.belief.set_values(values)
+        self._started()
+        data = self._userdata._data
+        data["action"] = ground.name
+        data["arguments"] = ground.arguments
+        data["params"] = ground.binding
+        data[DURATION_KEY] = self.timing.planned_duration
+        data.pop(OBSERVATIONS_KEY, None)
+        watch = self._watch(child)
+        self.belief.add_listener(watch)
+        try:
+            watch()  # the start effects may already break the invariant
+            skill_outcome = self.run_child()
+        finally:
+            self.belief.remove_listener(watch)
+        record.skill_outcome = skill_outcome
+        outcome = self.skill.map_outcome(skill_outcome) if self.skill else skill_outcome
+        try:
+            observations = normalise_observations(data.pop(OBSERVATIONS_KEY, None))
+        except ValueError as exc:
+            raise smach.InvalidUserCodeError(f"skill {self._path}/{label}: {exc}") from exc
+        if self._violation:
+            outcome = "aborted"
+            record.unmet = ("over all: " + ", ".join(self._violation),)
+        elif outcome == "succeeded":
+            with self.belief.locked() as facts:
+                unmet = ground.unmet_at_end(facts)
+                end = ground.end_effects(facts) if not unmet else (set(), set(), {})
+            if unmet:
+                outcome = "aborted"
+                record.unmet = ("at end: " + ", ".join(unmet),)
+            else:
+                self.belief.apply(end[0], end[1])
+                self.belief.set_values(end[2])
+        changed = self.belief.observe(observations)
+        record.observations_changed = tuple(
+            describe_observation(fact, truth) for fact, truth in changed
+        )
+        record.outcome = outcome
+        self._ended(outcome)
+        return self._finish(record, started)
+
+    def _watch(self, child: smach.State) -> Callable[[], None]:
+        """A belief listener: preempt the skill when an over-all condition breaks."""
+        ground = self.ground
+        if not ground._lifted.invariant_parts:
+            return lambda: None
+
+        def check() -> None:
+            if self._violation:
+                return
+            unmet = ground.unmet_invariant(self.belief.facts)
+            if unmet:
+                self._violation = unmet
+                child.request_preempt()
+
+        return check
+
+    def _started(self) -> None:
+        self.timing.actual_start = self.clock()
+        self.timing.actual_end = None
+        if self._bus.listeners:
+            t, thread = stamp()
+            self._bus.emit(
+                ActionStarted(
+                    path=self._path,
+                    time=t,
+                    thread=thread,
+                    index=self.index,
+                    action=str(self.ground.step),
+                    planned_start=self.timing.planned_start,
+                    planned_duration=self.timing.planned_duration,
+                    actual_start=self.timing.actual_start,
+                )
+            )
+
+    def _ended(self, outcome: str) -> None:
+        self.timing.actual_end = self.clock()
+        if self._bus.listeners:
+            t, thread = stamp()
+            self._bus.emit(
+                ActionEnded(
+                    path=self._path,
+                    time=t,
+                    thread=thread,
+                    index=self.index,
+                    action=str(self.ground.step),
+                    outcome=outcome,
+                    planned_start=self.timing.planned_start,
+                    planned_duration=self.timing.planned_duration,
+                    actual_start=self.timing.actual_start or 0.0,
+                    actual_end=self.timing.actual_end,
+                )
+            )
+
+
+# -- the dispatcher ------------------------------------------------------------------------
+
+
+@dataclass
+class _Dispatch:
+    """The state of one run of a :class:`TemporalDispatch`."""
+
+    t0: float
+    waiting: list[int]
+    running: dict[int, threading.Thread] = field(default_factory=dict)
+    started: dict[int, float] = field(default_factory=dict)
+    ended: dict[int, float] = field(default_factory=dict)
+    outcomes: dict[int, str] = field(default_factory=dict)
+    failure: str | None = None
+    errors: list[BaseException] = field(default_factory=list)
+
+
+class TemporalDispatch(smach.Container):
+    """Runs the steps of a temporal plan as they become ready (see the module doc).
+
+    Outcomes: ``succeeded`` when every step succeeded, else the first failing step's
+    outcome (``aborted``, ``invalid``, ``preempted``).
+    """
+
+    def __init__(
+        self,
+        steps: Sequence[PlanStep],
+        states: Sequence[TimedStepState],
+        labels: Sequence[str],
+        model: ActionModel,
+        belief: WorldState,
+        *,
+        time_scale: float = 0.0,
+        on_failure: str = "finish",
+    ) -> None:
+        if on_failure not in POLICIES:
+            raise ValueError(f"on_failure must be one of {', '.join(POLICIES)}, got {on_failure!r}")
+        if time_scale < 0:
+            raise ValueError(f"time_scale must be 0 or more, got {time_scale!r}")
+        input_keys = sorted({k for s in states for k in s.get_registered_input_keys()})
+        output_keys = sorted({k for s in states for k in s.get_registered_output_keys()})
+        super().__init__(list(STEP_OUTCOMES), input_keys, output_keys)
+        self.steps = list(steps)
+        self.labels = list(labels)
+        self.belief = belief
+        self.time_scale = time_scale
+        self.on_failure = on_failure
+        origin = min((s.start or 0.0 for s in self.steps), default=0.0)
+        self.planned_start = [(s.start or 0.0) - origin for s in self.steps]
+        self.waits = precedence(self.steps, model)
+        self._states: dict[str, TimedStepState] = {}
+        self._order = list(labels)
+        for label, state in zip(labels, states, strict=True):
+            self._adopt_child(label, state)
+            self._states[label] = state
+        self._remappers: dict[str, smach.Remapper] = {}
+        self._run_state: _Dispatch | None = None
+        self._wake = threading.Condition()
+
+    # -- Container interface -------------------------------------------------------------
+    def get_children(self) -> dict[str, smach.State]:
+        return dict(self._states)
+
+    def get_initial_states(self) -> list[str]:
+        return [self.labels[j] for j, waits in enumerate(self.waits) if not waits]
+
+    def get_active_states(self) -> list[str]:
+        run = self._run_state
+        if run is None:
+            return []
+        with self._wake:
+            return [self.labels[i] for i in run.running]
+
+    def get_internal_edges(self) -> list[tuple[str, str, str | None]]:
+        return [
+            (f"{edge.point}+{edge.lag:g}", self.labels[edge.before], self.labels[edge.after])
+            for waits in self.waits
+            for edge in waits
+        ]
+
+    def set_initial_state(
+        self, initial_states: Sequence[str], userdata: smach.UserData | None = None
+    ) -> None:
+        if userdata is not None:
+            self.userdata.update(userdata)
+
+    def consistency_problems(self) -> list[str]:
+        # Every child is a step whose own check covers its skill.
+        return []
+
+    def _compile(self) -> None:
+        self._remappers = {
+            label: self._remapper(label, state, None) for label, state in self._states.items()
+        }
+
+    def _terminal_states(self) -> list[str]:
+        return list(self._order)
+
+    @property
+    def makespan_planned(self) -> float:
+        """When the last step ends in the plan (plan seconds from the first start)."""
+        return max(
+            (
+                start + (s.duration or 0.0)
+                for start, s in zip(self.planned_start, self.steps, strict=True)
+            ),
+            default=0.0,
+        )
+
+    def timeline(self) -> list[dict[str, Any]]:
+        """Planned and actual start and end of every step (the Gantt view's rows)."""
+        rows = []
+        for label, state in self._states.items():
+            timing = state.timing
+            rows.append(
+                {
+                    "label": label,
+                    "action": str(state.ground.step),
+                    "outcome": state.record.outcome,
+                    "planned_start": timing.planned_start,
+                    "planned_duration": timing.planned_duration,
+                    "actual_start": timing.actual_start,
+                    "actual_end": timing.actual_end,
+                }
+            )
+        return rows
+
+    # -- execution -------------------------------------------------------------------------
+    def _run(self) -> str | None:
+        run = _Dispatch(t0=time.monotonic(), waiting=list(range(len(self.steps))))
+
+        def since_start(t0: float = run.t0) -> float:
+            return time.monotonic() - t0
+
+        for state in self._states.values():
+            state.clock = since_start
+        self._run_state = run
+        self.belief.add_listener(self._poke)
+        try:
+            self._loop(run)
+        finally:
+            self.belief.remove_listener(self._poke)
+            self._run_state = None
+        if run.errors:
+            raise run.errors[0]
+        if run.failure is not None:
+            return run.failure
+        if self._preempt_requested or run.waiting:
+            return "preempted"
+        return "succeeded"
+
+    def _poke(self) -> None:
+        with self._wake:
+            self._wake.notify_all()
+
+    def _loop(self, run: _Dispatch) -> None:
+        with self._wake:
+            while True:
+                stopping = run.failure is not None or self._preempt_requested or run.errors
+                due: float | None = None
+                if not stopping:
+                    due = self._start_ready(run)
+                if not run.running and (stopping or not run.waiting):
+                    return
+                if not run.running and due is None and run.waiting:
+                    # Nothing runs and nothing is due: start the first waiting step
+                    # whose predecessors happened, so that it reports why it cannot.
+                    if not self._force_start(run):
+                        run.failure = "aborted"
+                        return
+                    continue
+                timeout = None if due is None else max(0.0, due - time.monotonic())
+                self._wake.wait(timeout)
+
+    def _ready_at(self, run: _Dispatch, j: int) -> float | None:
+        """Wall time when step ``j`` may start, None while a predecessor has not happened."""
+        at = run.t0 + self.planned_start[j] * self.time_scale if self.time_scale > 0 else 0.0
+        for edge in self.waits[j]:
+            happened = (run.started if edge.point == "start" else run.ended).get(edge.before)
+            if happened is None:
+                return None
+            at = max(at, happened + edge.lag * self.time_scale)
+        return at
+
+    def _start_ready(self, run: _Dispatch) -> float | None:
+        """Start every step that is ready; return when the next one is due (or None)."""
+        now = time.monotonic()
+        due: float | None = None
+        facts = self.belief.facts
+        for j in list(run.waiting):
+            at = self._ready_at(run, j)
+            if at is None:
+                continue
+            if at > now:
+                due = at if due is None else min(due, at)
+                continue
+            state = self._states[self.labels[j]]
+            if state.check_preconditions and not state.ground.applicable(facts):
+                continue  # wait for the belief to change (or for _force_start)
+            self._launch(run, j)
+        return due
+
+    def _force_start(self, run: _Dispatch) -> bool:
+        for j in run.waiting:
+            at = self._ready_at(run, j)
+            if at is not None:
+                self._launch(run, j)
+                return True
+        return False
+
+    def _launch(self, run: _Dispatch, j: int) -> None:
+        run.waiting.remove(j)
+        run.started[j] = time.monotonic()
+        label = self.labels[j]
+        thread = threading.Thread(
+            target=self._run_child, args=(run, j), name=f"dispatch-{label}", daemon=True
+        )
+        run.running[j] = thread
+        thread.start()
+
+    def _run_child(self, run: _Dispatch, j: int) -> None:
+        label = self.labels[j]
+        state = self._states[label]
+        outcome = "aborted"
+        try:
+            outcome = self._step(
+                label, state, self._remappers[label], threading.current_thread().name
+            )
+        except BaseException as exc:  # reported by _run in the caller's thread
+            with self._wake:
+                run.errors.append(exc)
+        with self._wake:
+            run.running.pop(j, None)
+            run.ended[j] = time.monotonic()
+            run.outcomes[j] = outcome
+            if outcome != "succeeded" and run.failure is None and not run.errors:
+                run.failure = outcome
+                if self.on_failure == "preempt":
+                    for other in run.running:
+                        self._states[self.labels[other]].request_preempt()
+            self._wake.notify_all()
+
+    def request_preempt(self) -> None:
+        super().request_preempt()
+        self._poke()
+
+
+def compile_temporal(
+    steps: Sequence[PlanStep],
+    skills: SkillRegistry,
+    model: ActionModel,
+    belief: WorldState,
+    *,
+    first_index: int = 1,
+    check_preconditions: bool = True,
+    on_finished: Callable[[StepRecord], None] | None = None,
+    variants: Mapping[int, str] | None = None,
+    time_scale: float = 0.0,
+    on_failure: str = "finish",
+) -> CompiledPlan:
+    """A temporal plan as a :class:`TemporalDispatch` of :class:`TimedStepState` steps
+    (labels as for sequential plans: ``03_NAVIGATE_R1_DOCK_HALL``)."""
+    steps = list(steps)
+    width = max(2, len(str(first_index + len(steps))))
+    labels = [step_label(first_index + i, s, width) for i, s in enumerate(steps)]
+    states: list[TimedStepState] = []
+    for i, step in enumerate(steps):
+        skill_state, skill = skills.create(step, (variants or {}).get(i))
+        state = TimedStepState(
+            first_index + i,
+            model.ground(step),
+            belief,
+            skill,
+            check_preconditions=check_preconditions,
+            on_finished=on_finished,
+        )
+        state.add("SKILL", skill_state)
+        states.append(state)
+    dispatch = TemporalDispatch(
+        steps, states, labels, model, belief, time_scale=time_scale, on_failure=on_failure
+    )
+    return CompiledPlan(dispatch, steps, labels, list(states), [[i] for i in range(len(steps))])

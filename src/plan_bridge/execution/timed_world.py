@@ -1,0 +1,194 @@
+"""A simulated world for temporal and numeric domains, with faults in durative actions.
+
+:class:`TimedWorld` holds the true facts *and* the true numbers (``(battery r1)``).
+A :class:`TimedSkill` plays one durative action against it: the at-start conditions
+are checked and the at-start effects applied when it starts, the action lasts its
+duration (times :attr:`TimedWorld.time_scale` wall seconds per plan second, checking
+for a preempt every few milliseconds), then the over-all and at-end conditions are
+checked on the true world and the at-end effects applied. It reports what it saw of
+the atoms and numbers the action touches (numbers as numeric observations).
+
+Faults, each with probability ``fail_rate x fault_scale[kind]``:
+
+* ``late``: the action takes twice its planned duration;
+* ``halfway``: it fails halfway: the at-end effects do not happen and the robot
+  falls back to where it began (the at-start changes of facts are undone, energy
+  spent stays spent);
+* ``drift``: its numeric decreases are 1.5 times what the model says (a battery
+  draining faster than modelled), which the belief learns from the observation.
+
+Instantaneous actions of a temporal domain run as plain symbolic steps.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Mapping
+from typing import Any, ClassVar
+
+import smach
+from plan_bridge.execution.semantics import GroundAction
+from plan_bridge.execution.simulation import SimulatedWorld
+from plan_bridge.execution.world import FactSnapshot, values_of
+from plan_bridge.pddl.task import Fact, PlanningTask, format_fact, parse_fact
+from plan_bridge.planning.planner import PlanStep
+from plan_bridge.skills.registry import SkillRegistry
+
+__all__ = ["TimedSkill", "TimedWorld", "timed_skills"]
+
+Reading = tuple[Fact, "bool | float"]
+_SLICE_S = 0.005
+
+
+class TimedWorld(SimulatedWorld):
+    """True facts and numbers of a temporal/numeric domain, with timed faults."""
+
+    state: ClassVar[tuple[str, ...]] = ("values", "_undo")
+    fault_scale: ClassVar[Mapping[str, float]] = {"late": 1.0, "halfway": 1.0, "drift": 1.0}
+    #: How much faster a drifting numeric decrease is than modelled.
+    drift_factor = 1.5
+
+    def __init__(self, task: PlanningTask, **options: Any) -> None:
+        super().__init__(task, **options)
+        #: Numeric atoms (as PDDL text, for snapshots) -> value.
+        self.values: dict[str, float] = {
+            format_fact(atom): value for atom, value in self.model.initial_values().items()
+        }
+        #: Steps failing halfway -> (facts to add back, facts to remove) when they end.
+        self._undo: dict[str, tuple[set[Fact], set[Fact]]] = {}
+
+    def state_now(self) -> FactSnapshot:
+        """The true facts and numbers (call with the lock held)."""
+        return FactSnapshot(
+            self._facts, {parse_fact(atom): value for atom, value in self.values.items()}
+        )
+
+    @property
+    def facts(self) -> frozenset[Fact]:
+        with self._lock:
+            return self.state_now()
+
+    def goal_reached(self) -> bool:
+        return self.model.goal_holds(self.facts)
+
+    def _apply(self, adds: set[Fact], dels: set[Fact], values: Mapping[Fact, float]) -> None:
+        self._facts.difference_update(dels)
+        self._facts.update(adds)
+        for atom, value in values.items():
+            self.values[format_fact(atom)] = value
+
+    def begin(self, step: PlanStep) -> tuple[bool, set[str]]:
+        """Start ``step``: (started?, faults drawn for it). A step that will fail
+        halfway keeps its at-start effects in :attr:`_undo` until it ends."""
+        ground = self.model.ground(step)
+        with self._lock:
+            self.actions_run += 1
+            state = self.state_now()
+            if not ground.applicable(state):
+                return False, set()
+            faults = {kind for kind in ("late", "halfway", "drift") if self.chance(kind)}
+            for kind in sorted(faults):
+                self.inject(kind, str(step))
+            adds, dels, values = ground.start_effects(state)
+            self._apply(adds, dels, values)
+            # An action that does not end well (fails halfway, is preempted) leaves
+            # the robot where it began (a drive returns to its start): the at-start
+            # changes of facts are undone then; energy spent stays spent.
+            self._undo[str(step)] = (set(dels - adds), set(adds - dels))
+        return True, faults
+
+    def abandon(self, step: PlanStep) -> None:
+        """``step`` stopped before its end: undo its at-start changes of facts."""
+        with self._lock:
+            undo = self._undo.pop(str(step), None)
+            if undo is not None:
+                self._apply(undo[0], undo[1], {})
+
+    def finish(self, step: PlanStep, faults: set[str]) -> bool:
+        """End ``step`` (its over-all and at-end conditions, at-end effects)."""
+        ground = self.model.ground(step)
+        with self._lock:
+            state = self.state_now()
+            undo = self._undo.pop(str(step), None)
+            if "halfway" in faults or ground.unmet_invariant(state) or ground.unmet_at_end(state):
+                if undo is not None:
+                    self._apply(undo[0], undo[1], {})
+                return False
+            adds, dels, values = ground.end_effects(state)
+            if "drift" in faults:
+                before = values_of(state)
+                values = {
+                    atom: before[atom] - (before[atom] - value) * self.drift_factor
+                    if atom in before and value < before[atom]
+                    else value
+                    for atom, value in values.items()
+                }
+            self._apply(adds, dels, values)
+        return True
+
+    def readings(self, ground: GroundAction) -> list[Reading]:
+        """What a robot sees of the atoms and numbers ``ground`` touches."""
+        with self._lock:
+            state = self.state_now()
+            adds, dels, values = ground.all_effects(state)
+            atoms = set(ground.precondition_atoms() or ()) | adds | dels
+            out: list[Reading] = [(fact, fact in state) for fact in sorted(atoms)]
+            numbers = values_of(state)
+            out.extend((atom, numbers[atom]) for atom in sorted(values) if atom in numbers)
+        return out
+
+
+class TimedSkill(smach.State):
+    """Plays one (durative) action in a :class:`TimedWorld` (see the module doc)."""
+
+    def __init__(self, world: TimedWorld, step: PlanStep) -> None:
+        super().__init__(
+            outcomes=["succeeded", "aborted", "preempted"],
+            input_keys=["duration"],
+            output_keys=["observations"],
+        )
+        self.world = world
+        self.step = step
+
+    def execute(self, ud: smach.UserData) -> str:
+        ground = self.world.model.ground(self.step)
+        if self.preempt_requested():
+            self.service_preempt()
+            return "preempted"
+        started, faults = self.world.begin(self.step)
+        if not started:
+            ud.observations = self.world.readings(ground)
+            return "aborted"
+        duration = float(ud.duration or 0.0)
+        if "late" in faults:
+            duration *= 2.0
+        if "halfway" in faults:
+            duration /= 2.0
+        if not self._wait(duration * self.world.time_scale):
+            self.world.abandon(self.step)
+            ud.observations = self.world.readings(ground)
+            self.service_preempt()
+            return "preempted"
+        ok = self.world.finish(self.step, faults)
+        ud.observations = self.world.readings(ground)
+        return "succeeded" if ok else "aborted"
+
+    def _wait(self, seconds: float) -> bool:
+        """Wait ``seconds`` (wall); False when preempted meanwhile."""
+        deadline = time.monotonic() + seconds
+        event = threading.Event()
+        while True:
+            if self.preempt_requested():
+                return False
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return True
+            event.wait(min(left, _SLICE_S))
+
+
+def timed_skills(world: TimedWorld, registry: SkillRegistry | None = None) -> SkillRegistry:
+    """A registry whose unregistered actions run as :class:`TimedSkill` in ``world``."""
+    registry = registry or SkillRegistry()
+    registry.fallback = lambda step: TimedSkill(world, step)
+    return registry
