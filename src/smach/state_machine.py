@@ -336,7 +336,6 @@ class StateMachine(Container):
                         return None
                     raise self._missing_transition(slot, outcome) from None
                 if target.__class__ is _Slot:
-                    assert isinstance(target, _Slot)
                     if observed:
                         if bus.event_listeners or self._local:
                             self._emit_step(slot, outcome, target, thread)
