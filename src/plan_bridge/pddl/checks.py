@@ -269,7 +269,15 @@ def _numeric(ctx: _Context, node: Node, scope: Mapping[str, str], *, note: bool 
         if node.text.startswith("?"):
             if node.text == "?duration" and ctx.durative:
                 return
-            if node.text[1:] not in {k.lstrip("?") for k in scope}:
+            if node.text in scope:
+                ctx.diags.error(
+                    ctx.source,
+                    node.offset,
+                    f"{node.text} is an object (type {scope[node.text]!r}), but a number is "
+                    f"expected here in {ctx.where}",
+                    "use a function of it, e.g. (distance ?from ?to), or a number",
+                )
+            else:
                 ctx.diags.error(
                     ctx.source,
                     node.offset,

@@ -316,6 +316,12 @@ def _located(front: FrontEnd, is_domain: bool, message: str, exc: Exception) -> 
         source, offset = _position(front, is_domain, int(match.group(1)), int(match.group(2)))
         first = _LOCATION_IN_MESSAGE.split(first)[0].rstrip(" .,:;-")
         first = re.sub(r"(?:from|found at|error in expression from)\s*$", "", first).rstrip(" .,:;")
+    if offset is None and is_domain:
+        # No position in UP's message: the action it names, if it names one.
+        for action in front.domain_model.actions:
+            if re.search(rf"(?<![\w-]){re.escape(action.name)}(?![\w-])", message):
+                offset = action.offset
+                break
     from unified_planning.exceptions import (  # type: ignore[import-untyped]
         UPUnsupportedProblemTypeError,
     )
