@@ -56,8 +56,8 @@ def encode(value: Any, where: str = "value") -> Any:
     if kind is tuple:
         return {"tuple": [encode(v, f"{where}[{i}]") for i, v in enumerate(value)]}
     if kind in (set, frozenset):
-        if all(_is_fact(v) for v in value):
-            facts = sorted(" ".join(v) for v in value)
+        facts = _facts(value)
+        if facts is not None:
             return {"facts": facts} if kind is set else {"frozen_facts": facts}
         items = [encode(v, f"{where} item") for v in value]
         return {kind.__name__: sorted(items, key=_order)}
@@ -80,12 +80,22 @@ def encode(value: Any, where: str = "value") -> Any:
     )
 
 
-def _is_fact(value: Any) -> bool:
-    return (
-        type(value) is tuple
-        and bool(value)
-        and all(type(w) is str and w and not any(c.isspace() for c in w) for w in value)
-    )
+def _facts(value: set[Any] | frozenset[Any]) -> list[str] | None:
+    """The sorted ``"word word ..."`` texts of a set of facts (tuples of words without
+    spaces), or None if it holds anything else."""
+    texts = []
+    for item in value:
+        if type(item) is not tuple or not item:
+            return None
+        try:
+            text = " ".join(item)
+        except TypeError:  # not all strings
+            return None
+        if len(text.split()) != len(item):  # a word with a space, or an empty one
+            return None
+        texts.append(text)
+    texts.sort()
+    return texts
 
 
 def _order(item: Any) -> str:

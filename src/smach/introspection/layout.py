@@ -16,8 +16,9 @@ font), so boxes fit their labels without a browser.
 
 from __future__ import annotations
 
+import bisect
 import math
-from collections.abc import Collection
+from collections.abc import Collection, Iterator
 from dataclasses import dataclass, field
 
 from smach.introspection.structure import StateNode
@@ -279,6 +280,7 @@ def _container(node: StateNode, collapsed: Collection[str], depth: int) -> _Bloc
             out_count[edge.source] = out_count.get(edge.source, 0) + 1
     out_seen: dict[str, int] = {}
     lanes: dict[str, float] = {}
+    boxes = _Boxes(placed)
     for edge in node.edges:
         if edge.source not in placed:
             continue
@@ -315,7 +317,7 @@ def _container(node: StateNode, collapsed: Collection[str], depth: int) -> _Bloc
                 f"{s_right + 40:.1f},{s_mid + 30:.1f} {s_right:.1f},{s_mid + 8:.1f}"
             )
             lx, ly = s_right + 34, s_mid
-        elif ty > sy + 4 and (lane := _lane(placed, edge, sx, sy, tx, ty, lanes)) is not None:
+        elif ty > sy + 4 and (lane := _lane(boxes, edge, sx, sy, tx, ty, lanes)) is not None:
             # A long edge would cross the states between: run it down a lane beside them.
             d = (
                 f"M{sx:.1f},{sy:.1f} C{sx:.1f},{sy + 16:.1f} {lane:.1f},{sy + 6:.1f} "
@@ -387,11 +389,30 @@ def _separate_labels(edges: list[EdgeShape], first: int) -> None:
 
     Each label keeps its place if it is free, else takes the nearest free place along
     its edge's direction (below or above first, then beside), so no two labels overlap.
+    Boxes are kept in a grid of :data:`_CELL` px squares, so a plan of thousands of
+    steps is checked in linear time.
     """
-    placed = [label_box(e) for e in edges[:first]]
+    grid: dict[tuple[int, int], list[tuple[float, float, float, float]]] = {}
+
+    def cells(box: tuple[float, float, float, float]) -> list[tuple[int, int]]:
+        return [
+            (cx, cy)
+            for cx in range(int(box[0] // _CELL), int(box[2] // _CELL) + 1)
+            for cy in range(int(box[1] // _CELL), int(box[3] // _CELL) + 1)
+        ]
+
+    def free(box: tuple[float, float, float, float]) -> bool:
+        return not any(_overlap(box, other) for c in cells(box) for other in grid.get(c, ()))
+
+    def place(box: tuple[float, float, float, float]) -> None:
+        for c in cells(box):
+            grid.setdefault(c, []).append(box)
+
+    for edge in edges[:first]:
+        place(label_box(edge))
     for edge in edges[first:]:
         box = label_box(edge)
-        if any(_overlap(box, other) for other in placed):
+        if not free(box):
             width = box[2] - box[0]
             step = LABEL_H + 1
             candidates = [
@@ -401,16 +422,40 @@ def _separate_labels(edges: list[EdgeShape], first: int) -> None:
             ]
             for dx, dy in candidates:
                 moved = (box[0] + dx, box[1] + dy, box[2] + dx, box[3] + dy)
-                if not any(_overlap(moved, other) for other in placed):
+                if free(moved):
                     edge.label_x += dx
                     edge.label_y += dy
                     box = moved
                     break
-        placed.append(box)
+        place(box)
+
+
+_CELL = 64.0
+
+
+class _Boxes:
+    """The boxes of a container sorted by their top, to find those an edge would cross."""
+
+    def __init__(self, placed: dict[str, tuple[float, float, _Block]]) -> None:
+        self.items = sorted((y, x, b.w, b.h, label) for label, (x, y, b) in placed.items())
+        self.tops = [item[0] for item in self.items]
+        self.right = max((x + w for _, x, w, _, _ in self.items), default=0.0)
+
+    def between(
+        self, source: str, target: str, sy: float, ty: float, lo: float, hi: float
+    ) -> Iterator[float]:
+        """The right sides of the boxes strictly between ``sy`` and ``ty`` in ``[lo, hi]``."""
+        items = self.items
+        for i in range(bisect.bisect_right(self.tops, sy), len(items)):
+            y, x, w, h, label = items[i]
+            if y >= ty:
+                return
+            if y + h < ty and x < hi and x + w > lo and label not in (source, target):
+                yield x + w
 
 
 def _lane(
-    placed: dict[str, tuple[float, float, _Block]],
+    boxes: _Boxes,
     edge: object,
     sx: float,
     sy: float,
@@ -426,17 +471,15 @@ def _lane(
     source = getattr(edge, "source", "")
     target = getattr(edge, "target", "")
     lo, hi = min(sx, tx) - 10, max(sx, tx) + 10
-    between = [
-        (x, y, b)
-        for label, (x, y, b) in placed.items()
-        if label not in (source, target) and y > sy and y + b.h < ty and x < hi and x + b.w > lo
-    ]
-    if not between:
+    crossed = boxes.between(source, target, sy, ty, lo, hi)
+    first = next(crossed, None)
+    if first is None:
         return None
-    right = max(x + b.w for x, _, b in between)
-    right = max(right, sx, tx)
     key = f"{getattr(edge, 'terminal', False)}:{target}"
     shared = lanes.get(key)
+    if shared is not None and shared >= max(boxes.right, sx, tx) + 18:
+        return shared  # right of every box: no need to look at each
+    right = max(first, *crossed, sx, tx)
     if shared is not None and shared >= right + 18:
         return shared
     lane = right + 18
