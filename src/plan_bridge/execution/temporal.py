@@ -25,7 +25,15 @@ listener, no polling) and a violation preempts its skill: the step ends ``aborte
 naming the condition. When the skill succeeds, the at-end conditions are checked and
 the at-end effects applied, computed in the belief of that moment (a battery drained
 meanwhile by another action is decreased from its current value). Skills receive the
-planned duration in ``ud.duration`` (plan seconds) besides the usual step keys.
+planned duration in ``ud.duration`` (plan seconds) besides the usual step keys, and
+``ud.end_ready``: a callable that returns once the plan lets the step end.
+
+**When a step ends.** A step's end waits for the points planned before it of the
+steps it interferes with (:func:`end_precedence`): a door held for a robot passing
+through is not released before the robot is through, however quick the holding
+skill. The wait happens when the skill calls ``ud.end_ready()`` (a skill holding
+something calls it before letting go) and in any case before the at-end effects
+reach the belief.
 
 **Failure.** The first step that ends other than ``succeeded`` stops new starts. The
 policy ``on_failure`` says what happens to the steps still running: ``"finish"``
@@ -64,19 +72,25 @@ from smach.introspection.events import Event, stamp
 
 __all__ = [
     "DURATION_KEY",
+    "END_READY_KEY",
     "ActionEnded",
     "ActionStarted",
     "Edge",
     "TemporalDispatch",
     "TimedStepState",
     "compile_temporal",
+    "end_precedence",
     "is_temporal",
     "precedence",
 ]
 
 #: Userdata key holding a step's planned duration (plan seconds) for its skill.
 DURATION_KEY = "duration"
-_TIMED_STEP_KEYS = (*STEP_KEYS, DURATION_KEY)
+#: Userdata key of a callable a skill may call before it ends its action in the
+#: world: it returns once the plan allows this step to end (a door is held until
+#: the robot passing through it is through).
+END_READY_KEY = "end_ready"
+_TIMED_STEP_KEYS = (*STEP_KEYS, DURATION_KEY, END_READY_KEY)
 #: Plan times closer than this are the same instant (engines separate by epsilon).
 EPSILON = 1e-6
 POLICIES = ("finish", "preempt")
@@ -175,8 +189,28 @@ def _footprint(ground: GroundAction) -> tuple[set[Fact], set[Fact]]:
     return reads, writes
 
 
+def end_precedence(steps: Sequence[PlanStep], model: ActionModel) -> list[list[Edge]]:
+    """For each step, the points its *end* waits for: the start and end points of the
+    interfering steps planned before its end (a light held for an inspection is not
+    switched off before the inspection ends, however quick the holding skill)."""
+    prints = [_footprint(model.ground(step)) for step in steps]
+    starts = [step.start or 0.0 for step in steps]
+    ends = [(step.start or 0.0) + (step.duration or 0.0) for step in steps]
+    waits: list[list[Edge]] = [[] for _ in steps]
+    for i in range(len(steps)):
+        reads_i, writes_i = prints[i]
+        for j in range(len(steps)):
+            reads_j, writes_j = prints[j]
+            if i == j or not (writes_i & (reads_j | writes_j) or writes_j & reads_i):
+                continue
+            for point, at in (("start", starts[j]), ("end", ends[j])):
+                if at < ends[i] - EPSILON and (point == "end" or starts[j] > starts[i] + EPSILON):
+                    waits[i].append(Edge(j, i, point, 0.0))
+    return waits
+
+
 def precedence(steps: Sequence[PlanStep], model: ActionModel) -> list[list[Edge]]:
-    """For each step, the edges it waits for (see the module documentation)."""
+    """For each step, the edges its start waits for (see the module documentation)."""
     prints = [_footprint(model.ground(step)) for step in steps]
     starts = [step.start or 0.0 for step in steps]
     ends = [(step.start or 0.0) + (step.duration or 0.0) for step in steps]
@@ -233,6 +267,9 @@ class TimedStepState(StepState):
         step = ground.step
         self.timing = Timing(step.start or 0.0, step.duration or 0.0)
         self.clock: Callable[[], float] = time.monotonic
+        #: Called when the skill succeeded, before the end point: the dispatcher
+        #: holds the end until the points planned before it have happened.
+        self.before_end: Callable[[], None] | None = None
         self._violation: list[str] = []
 
     def add(
@@ -273,12 +310,15 @@ class TimedStepState(StepState):
         data["arguments"] = ground.arguments
         data["params"] = ground.binding
         data[DURATION_KEY] = self.timing.planned_duration
+        data[END_READY_KEY] = self._end_ready
         data.pop(OBSERVATIONS_KEY, None)
         watch = self._watch(child)
         self.belief.add_listener(watch)
         try:
             watch()  # the start effects may already break the invariant
             skill_outcome = self.run_child()
+            if self.before_end is not None and not self._violation:
+                self.before_end()
         finally:
             self.belief.remove_listener(watch)
         record.skill_outcome = skill_outcome
@@ -307,6 +347,10 @@ class TimedStepState(StepState):
         record.outcome = outcome
         self._ended(outcome)
         return self._finish(record, started)
+
+    def _end_ready(self) -> None:
+        if self.before_end is not None and not self._violation:
+            self.before_end()
 
     def _watch(self, child: smach.State) -> Callable[[], None]:
         """A belief listener: preempt the skill when an over-all condition breaks."""
@@ -412,6 +456,7 @@ class TemporalDispatch(smach.Container):
         origin = min((s.start or 0.0 for s in self.steps), default=0.0)
         self.planned_start = [(s.start or 0.0) - origin for s in self.steps]
         self.waits = precedence(self.steps, model)
+        self.end_waits = end_precedence(self.steps, model)
         self._states: dict[str, TimedStepState] = {}
         self._order = list(labels)
         for label, state in zip(labels, states, strict=True):
@@ -496,8 +541,9 @@ class TemporalDispatch(smach.Container):
         def since_start(t0: float = run.t0) -> float:
             return time.monotonic() - t0
 
-        for state in self._states.values():
+        for index, state in enumerate(self._states.values()):
             state.clock = since_start
+            state.before_end = lambda i=index: self._await_end(run, i)
         self._run_state = run
         self.belief.add_listener(self._poke)
         try:
@@ -512,6 +558,17 @@ class TemporalDispatch(smach.Container):
         if self._preempt_requested or run.waiting:
             return "preempted"
         return "succeeded"
+
+    def _await_end(self, run: _Dispatch, i: int) -> None:
+        """Hold step ``i``'s end until its end predecessors happened (or the run stops)."""
+        with self._wake:
+            while not (run.failure is not None or self._preempt_requested or run.errors):
+                if all(
+                    edge.before in (run.started if edge.point == "start" else run.ended)
+                    for edge in self.end_waits[i]
+                ):
+                    return
+                self._wake.wait()
 
     def _poke(self) -> None:
         with self._wake:

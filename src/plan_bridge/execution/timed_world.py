@@ -145,7 +145,7 @@ class TimedSkill(smach.State):
     def __init__(self, world: TimedWorld, step: PlanStep) -> None:
         super().__init__(
             outcomes=["succeeded", "aborted", "preempted"],
-            input_keys=["duration"],
+            input_keys=["duration", "end_ready"],
             output_keys=["observations"],
         )
         self.world = world
@@ -170,6 +170,8 @@ class TimedSkill(smach.State):
             ud.observations = self.world.readings(ground)
             self.service_preempt()
             return "preempted"
+        if "halfway" not in faults:
+            ud.end_ready()  # e.g. keep holding the door until the courier is through
         ok = self.world.finish(self.step, faults)
         ud.observations = self.world.readings(ground)
         return "succeeded" if ok else "aborted"

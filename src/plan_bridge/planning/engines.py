@@ -189,6 +189,8 @@ class AutoPlanner:
         started = time.monotonic()
         deadline = started + timeout
         engines = self.engines(task)
+        if values is None and isinstance(getattr(initial_state, "values", None), Mapping):
+            values = initial_state.values  # type: ignore[union-attr]  # a belief snapshot
         facts = None if initial_state is None else list(initial_state)
         atoms = None if goal is None else list(goal)
         tried: list[str] = []

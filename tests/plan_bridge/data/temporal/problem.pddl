@@ -1,0 +1,7 @@
+(define (problem one-round)
+  (:domain night-patrol)
+  (:objects scout lamp - bot yard - spot)
+  (:init (docked scout) (at scout yard) (at lamp yard)
+         (= (energy scout) 12) (= (energy lamp) 3) (= (rounds) 0))
+  (:goal (and (inspected yard) (>= (rounds) 1)))
+)

@@ -1,0 +1,175 @@
+"""Temporal plans dispatched as SMACH: start order, overlap, over-all monitoring, late actions."""
+
+from __future__ import annotations
+
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+import smach
+from plan_bridge.execution.compile import compile_plan
+from plan_bridge.execution.semantics import ActionModel
+from plan_bridge.execution.temporal import (
+    ActionEnded,
+    ActionStarted,
+    TemporalDispatch,
+    precedence,
+)
+from plan_bridge.execution.world import WorldState
+from plan_bridge.pddl.task import PlanningTask, load_task
+from plan_bridge.planning.planner import PlanStep
+from plan_bridge.skills.registry import SkillRegistry
+
+DATA = Path(__file__).resolve().parents[1] / "data" / "temporal"
+
+pytestmark = pytest.mark.timeout(60)
+
+PLAN = [
+    PlanStep("hold-light", ("lamp", "yard"), 0.0, 4.0),
+    PlanStep("undock", ("scout", "yard"), 0.0, 1.0),
+    PlanStep("inspect", ("scout", "yard"), 1.01, 2.0),
+]
+
+
+@pytest.fixture(scope="module")
+def task() -> PlanningTask:
+    return load_task(DATA / "domain.pddl", DATA / "problem.pddl")
+
+
+class Sleep(smach.State):
+    """A skill that takes ``seconds`` (preemptable) and records what it was given."""
+
+    def __init__(self, seconds: float = 0.0, seen: list[float] | None = None) -> None:
+        super().__init__(["succeeded", "aborted", "preempted"], input_keys=["duration"])
+        self.seconds = seconds
+        self.seen = seen
+
+    def execute(self, ud: smach.UserData) -> str:
+        if self.seen is not None:
+            self.seen.append(ud.duration)
+        deadline = time.monotonic() + self.seconds
+        while time.monotonic() < deadline:
+            if self.preempt_requested():
+                self.service_preempt()
+                return "preempted"
+            time.sleep(0.002)
+        return "succeeded"
+
+
+def skills_with(**seconds: float) -> SkillRegistry:
+    registry = SkillRegistry()
+    registry.fallback = lambda step: Sleep(seconds.get(step.action.replace("-", "_"), 0.0))
+    return registry
+
+
+def run(
+    task: PlanningTask, skills: SkillRegistry, steps: list[PlanStep], **options: object
+) -> tuple[str | None, TemporalDispatch, WorldState, list[object]]:
+    model = ActionModel(task)
+    belief = WorldState(task.initial_facts, model.initial_values())
+    compiled = compile_plan(steps, skills, model, belief, **options)  # type: ignore[arg-type]
+    dispatch = compiled.machine
+    assert isinstance(dispatch, TemporalDispatch)
+    events: list[object] = []
+    dispatch._bus.add(events.append)
+    return dispatch.execute(), dispatch, belief, events
+
+
+def test_a_time_triggered_plan_compiles_to_one_dispatcher_whose_steps_overlap(
+    task: PlanningTask,
+) -> None:
+    outcome, dispatch, belief, events = run(task, skills_with(hold_light=0.15), PLAN)
+    assert outcome == "succeeded"
+    assert ("inspected", "yard") in belief
+    assert belief.values[("rounds",)] == 1.0 and belief.values[("energy", "scout")] == 7.0
+    assert ("light-on", "yard") not in belief  # the at-end effect of hold-light
+    rows = {row["action"]: row for row in dispatch.timeline()}
+    light, inspect = rows["(hold-light lamp yard)"], rows["(inspect scout yard)"]
+    # The inspection ran while the light was held: the two actions overlapped.
+    assert inspect["actual_start"] < light["actual_end"]
+    kinds = [type(e) for e in events if isinstance(e, ActionStarted | ActionEnded)]
+    assert kinds.count(ActionStarted) == 3 and kinds.count(ActionEnded) == 3
+
+
+def test_a_step_waits_for_the_end_of_a_causal_predecessor_and_the_start_of_an_overlapping_one(
+    task: PlanningTask,
+) -> None:
+    waits = precedence(PLAN, ActionModel(task))
+    inspect = {(edge.before, edge.point) for edge in waits[2]}
+    assert inspect == {(0, "start"), (1, "end")}
+    assert waits[0] == [] and waits[1] == []
+
+
+def test_a_late_action_delays_its_dependents_instead_of_breaking_them(
+    task: PlanningTask,
+) -> None:
+    outcome, dispatch, _, _ = run(task, skills_with(undock=0.3, hold_light=0.5), PLAN)
+    assert outcome == "succeeded"
+    rows = {row["action"]: row for row in dispatch.timeline()}
+    undock, inspect = rows["(undock scout yard)"], rows["(inspect scout yard)"]
+    assert inspect["actual_start"] >= undock["actual_end"]
+
+
+def test_skills_receive_the_planned_duration(task: PlanningTask) -> None:
+    seen: list[float] = []
+    registry = SkillRegistry()
+    registry.fallback = lambda step: Sleep(0.0, seen)
+    outcome, *_ = run(task, registry, PLAN)
+    assert outcome == "succeeded"
+    assert sorted(seen) == [1.0, 2.0, 4.0]
+
+
+def test_an_over_all_condition_broken_mid_action_preempts_the_step(task: PlanningTask) -> None:
+    registry = skills_with(hold_light=5.0, inspect=5.0)
+    model = ActionModel(task)
+    belief = WorldState(task.initial_facts, model.initial_values())
+    compiled = compile_plan(PLAN, registry, model, belief, on_failure="preempt")
+    dispatch = compiled.machine
+    outcome: list[str | None] = []
+    runner = threading.Thread(target=lambda: outcome.append(dispatch.execute()))
+    runner.start()
+    deadline = time.monotonic() + 10
+    while compiled.step_states[2].timing.actual_start is None and time.monotonic() < deadline:
+        time.sleep(0.005)
+    # Somebody switched the light off while the scout inspects.
+    belief.observe([(("light-on", "yard"), False)])
+    runner.join(20)
+    assert outcome == ["aborted"]
+    record = compiled.step_states[2].record
+    assert record.outcome == "aborted"
+    assert record.unmet == ("over all: (light-on yard)",)
+    assert ("inspected", "yard") not in belief
+    # The preempt policy stopped the light holder too.
+    assert compiled.step_states[0].record.skill_outcome == "preempted"
+
+
+def test_the_finish_policy_lets_the_other_running_steps_complete(task: PlanningTask) -> None:
+    steps = [PlanStep("inspect", ("scout", "yard"), 0.0, 2.0), PLAN[0]]
+    outcome, dispatch, belief, _ = run(task, skills_with(hold_light=0.1), steps)
+    # inspect cannot start (docked); hold-light ran to its end meanwhile.
+    assert outcome == "invalid"
+    rows = {row["action"]: row for row in dispatch.timeline()}
+    assert rows["(hold-light lamp yard)"]["outcome"] == "succeeded"
+    assert rows["(inspect scout yard)"]["outcome"] == "invalid"
+
+
+def test_time_scale_plays_the_plan_timeline(task: PlanningTask) -> None:
+    outcome, dispatch, _, _ = run(task, skills_with(), PLAN, time_scale=0.05)
+    assert outcome == "succeeded"
+    rows = {row["action"]: row for row in dispatch.timeline()}
+    # inspect is planned at 1.01 s: with 0.05 wall s per plan s, not before ~0.05 s.
+    assert rows["(inspect scout yard)"]["actual_start"] >= 1.01 * 0.05
+    assert dispatch.makespan_planned == pytest.approx(4.0)
+
+
+def test_the_timed_check_accepts_overlap_and_refuses_a_broken_invariant(
+    task: PlanningTask,
+) -> None:
+    model = ActionModel(task)
+    facts = WorldState(task.initial_facts, model.initial_values()).facts
+    assert model.check_plan(PLAN, facts).valid
+    late_light = [PLAN[0], PLAN[1], PlanStep("inspect", ("scout", "yard"), 3.5, 2.0)]
+    check = model.check_plan(late_light, facts)
+    assert not check.valid and check.unmet == ("over all: (light-on yard)",)
