@@ -153,6 +153,7 @@ def test_the_finish_policy_lets_the_other_running_steps_complete(task: PlanningT
     rows = {row["action"]: row for row in dispatch.timeline()}
     assert rows["(hold-light lamp yard)"]["outcome"] == "succeeded"
     assert rows["(inspect scout yard)"]["outcome"] == "invalid"
+    assert ("light-on", "yard") not in belief  # its at-end effect was applied
 
 
 def test_time_scale_plays_the_plan_timeline(task: PlanningTask) -> None:
