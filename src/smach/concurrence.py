@@ -394,11 +394,11 @@ class Concurrence(Container):
             for outcome in sorted(wanted)
         ]
 
-    def _log_started(self, initial_states: Sequence[str]) -> None:
+    def _log_started(self) -> None:
         smach.loginfo(f"Concurrence starting with userdata: \n\t{list(self._userdata.keys())}")
 
     def _log_exited(self, label: str, outcome: str | None) -> None:
         smach.loginfo(f"Concurrent state '{label}' returned outcome '{outcome}' on termination.")
 
-    def _log_terminated(self, terminal_states: Sequence[str], outcome: str | None) -> None:
+    def _log_terminated(self, outcome: str | None) -> None:
         smach.loginfo(f"Concurrent Outcomes: {dict(self._child_outcomes)}")

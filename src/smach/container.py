@@ -288,7 +288,7 @@ class Container(ContainerEvents, State):
             else:
                 self._thread = None
                 if self._log_info:
-                    self._log_started(self._start_states())
+                    self._log_started()
             outcome = self._run()
             if outcome is None:
                 return None
@@ -300,7 +300,7 @@ class Container(ContainerEvents, State):
             if bus.listeners or self._local:
                 self._emit_terminated(self._terminal_states(), outcome, self._thread)
             elif self._log_info:
-                self._log_terminated(self._terminal_states(), outcome)
+                self._log_terminated(outcome)
             if parent_ud is not None and self._copies_out:
                 self._copy_output_keys(parent_ud)
             return outcome

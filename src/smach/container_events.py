@@ -69,6 +69,12 @@ class ContainerEvents:
     def get_active_states(self) -> list[str]:
         raise NotImplementedError
 
+    def _start_states(self) -> list[str]:
+        raise NotImplementedError
+
+    def _terminal_states(self) -> list[str]:
+        raise NotImplementedError
+
     # -- listeners and callbacks ------------------------------------------------------------
     def add_listener(self, listener: Listener) -> None:
         """Receive every event of the whole tree this container belongs to."""
@@ -135,8 +141,10 @@ class ContainerEvents:
         self._local = (self._callbacks_listener,) if has_cbs else ()
 
     # -- INFO log lines (override per container type; called only when lines are wanted) --
-    def _log_started(self, initial_states: Sequence[str]) -> None:
-        _smach.loginfo(f"{type(self).__name__} {self._path} starting in {list(initial_states)}")
+    # The start and termination lines take what they show from the container (one call
+    # per line: this runs once per container run whenever loggers are installed).
+    def _log_started(self) -> None:
+        _smach.loginfo(f"{type(self).__name__} {self._path} starting in {self._start_states()}")
 
     def _log_entered(self, label: str) -> None:
         """No line by default (the original SMACH wrote none)."""
@@ -149,10 +157,10 @@ class ContainerEvents:
             f"{type(self).__name__} {self._path} transitioning '{source}':'{outcome}'-->'{target}'"
         )
 
-    def _log_terminated(self, terminal_states: Sequence[str], outcome: str | None) -> None:
+    def _log_terminated(self, outcome: str | None) -> None:
         _smach.loginfo(
             f"{type(self).__name__} {self._path} terminating "
-            f"{list(terminal_states)} with outcome '{outcome}'"
+            f"{self._terminal_states()} with outcome '{outcome}'"
         )
 
     # -- emitting --------------------------------------------------------------------------
@@ -191,7 +199,7 @@ class ContainerEvents:
             kind = type(self).__name__
             self._send(ContainerStarted, self._path, thread, kind, tuple(initial_states))
         if self._log_info:
-            self._log_started(initial_states)
+            self._log_started()
 
     def _emit_entered(self, label: str, thread: str | None = None) -> None:
         if self._bus.listeners or self._local:
@@ -220,7 +228,7 @@ class ContainerEvents:
             states = tuple(terminal_states)
             self._send(ContainerTerminated, self._path, thread, states, outcome)
         if self._log_info:
-            self._log_terminated(terminal_states, outcome)
+            self._log_terminated(outcome)
 
     def _emit_error(self, exc: BaseException) -> None:
         if self._bus.listeners:

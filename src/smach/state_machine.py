@@ -508,16 +508,16 @@ class StateMachine(Container):
             for outcome, target in table.items()
         ]
 
-    def _log_started(self, initial_states: Sequence[str]) -> None:
+    def _log_started(self) -> None:
         smach.loginfo(
-            f"State machine starting in initial state '{initial_states[0]}' with "
-            f"userdata: \n\t{list(self._userdata._data)}"
+            f"State machine starting in initial state '{self._initial_state_label}' with "
+            f"userdata: \n\t{[*self._userdata._data]}"
         )
 
     def _log_transition(self, source: str, outcome: str, target: str) -> None:
         smach.loginfo(f"State machine transitioning '{source}':'{outcome}'-->'{target}'")
 
-    def _log_terminated(self, terminal_states: Sequence[str], outcome: str | None) -> None:
+    def _log_terminated(self, outcome: str | None) -> None:
         smach.loginfo(
-            f"State machine terminating '{terminal_states[0]}':'{self._last_outcome}':'{outcome}'"
+            f"State machine terminating '{self._last_label}':'{self._last_outcome}':'{outcome}'"
         )
