@@ -73,6 +73,7 @@ def test_a_world_knows_its_variants_and_refuses_others() -> None:
 
 DOMAINS = Path(__file__).parents[3] / "domains"
 SHIPPED = ("door_opening", "fetch_drink", "recharge", "table_clearing", "two_robot_delivery")
+WITH_WORLDS = (*SHIPPED, "timed_courier")  # every domain folder with a simulated world
 
 
 def shipped_world(domain: str, seed: int = 1, fail_rate: float = 0.3) -> Any:
@@ -84,7 +85,7 @@ def shipped_world(domain: str, seed: int = 1, fail_rate: float = 0.3) -> Any:
 
 def all_world_classes() -> list[type[SimulatedWorld]]:
     """Every subclass of SimulatedWorld loaded so far (shipped domains included)."""
-    for domain in SHIPPED:
+    for domain in WITH_WORLDS:
         shipped_world(domain)
     found: list[type[SimulatedWorld]] = []
     stack = [SimulatedWorld]
@@ -105,7 +106,7 @@ def test_every_world_class_declares_each_of_its_attributes_once() -> None:
     assert {"DoorWorld", "TableWorld", "RechargeWorld", "FaultyWorld"} <= set(checked)
 
 
-@pytest.mark.parametrize("domain", SHIPPED)
+@pytest.mark.parametrize("domain", WITH_WORLDS)
 def test_a_shipped_world_has_no_attribute_outside_its_declarations(domain: str) -> None:
     _, setup = shipped_world(domain)
     assert setup.world.undeclared() == []
