@@ -79,7 +79,7 @@ __all__ = [
 ]
 
 FORMAT = "smach-journal/1"
-FULL_EVERY = 100
+FULL_EVERY = 1000
 """Every this many :meth:`Journal.write_state` records of a kind, one is written whole."""
 
 
