@@ -22,6 +22,13 @@ planning and execution time, and the planning share of the mission time. Policie
   problem (a study's seeds, a robot that runs the same job again): from the second
   mission on the initial plan is reused.
 
+A second scenario, ``setback``, makes failures change the world: a failed action also
+undoes the action before it with probability 0.5 (a block slips back), so the failed
+step cannot start again and the held plan breaks. There, re-achieving the broken
+precondition (re-doing the undone step without a planner, else goal-regression
+repair: a planned prefix that re-establishes what was undone) competes with replanning: ``full, no repair`` is the default policy with
+``repair=False``.
+
 Symbolic actions take no time, so every mission's execution time is the executive's
 own work; ``action ms for 30%`` is how long each executed action would have to take
 for planning to be at most 30% of the mission time.
@@ -46,6 +53,7 @@ BENCH = (ROOT / ".." / "shared" / "pddl-bench").resolve()
 #: 74-90 steps (the issue's "74-step IPC problem with faults").
 PROBLEMS = (("blocks", "probBLOCKS-14-0"), ("visitall-sat11-strips", "problem12"))
 POLICIES = ("replan-only", "before", "full", "full, shared cache")
+SETBACK_POLICIES = ("before", "full, no repair", "full")
 
 
 def policy_named(name: str) -> Any:
@@ -56,31 +64,74 @@ def policy_named(name: str) -> Any:
     if name == "before":
         return ReplanPolicy(
             max_step_retries=1,
+            redo_window=0,
             hold_valid_plan=False,
             reuse_plans=False,
             replan_portfolio=(),
             replan_timeout=60.0,
         )
+    if name == "full, no repair":
+        return ReplanPolicy(repair=False)
     return ReplanPolicy()
 
 
+def setback_world(task: Any, seed: int, fail_rate: float) -> Any:
+    """A simulated world whose failed actions undo the previous action half of the time."""
+    from plan_bridge.execution.simulation import SimulatedWorld
+
+    class SetbackWorld(SimulatedWorld):
+        def __init__(self) -> None:
+            super().__init__(task, seed=seed, fail_rate=fail_rate)
+            self._before_last: frozenset[Any] | None = None
+
+        def perform(self, step: Any) -> Any:
+            before = self.facts
+            ok, observations = super().perform(step)
+            if ok:
+                self._before_last = before
+            elif self._before_last is not None and self.rng.random() < 0.5:
+                with self._lock:
+                    now = set(self._facts)
+                    self._facts = set(self._before_last)
+                    changed = now ^ self._facts
+                self.inject("setback", str(step), "the previous action was undone")
+                self._before_last = None
+                observations = [*observations, *((f, f in self._facts) for f in sorted(changed))]
+            return ok, observations
+
+    return SetbackWorld()
+
+
 def mission(
-    folder: str, problem: str, seed: int, fail_rate: float, policy: Any, planner: Any, cache: Any
+    folder: str,
+    problem: str,
+    seed: int,
+    fail_rate: float,
+    policy: Any,
+    planner: Any,
+    cache: Any,
+    setback: bool = False,
 ) -> dict[str, Any]:
     from plan_bridge.execution.executive import Executive
+    from plan_bridge.execution.simulation import symbolic_skills
     from plan_bridge.missions.mission import load_target
 
     target = load_target(BENCH / folder / "domain.pddl", BENCH / folder / f"{problem}.pddl")
-    setup = target.setup(seed=seed, fail_rate=fail_rate)
+    if setback:
+        world = setback_world(target.task, seed, fail_rate)
+        skills = symbolic_skills(world)
+    else:
+        setup = target.setup(seed=seed, fail_rate=fail_rate)
+        world, skills = setup.world, setup.skills
     executive = Executive(
-        target.task, setup.skills, planner, policy=replace(policy, max_replans=20), plan_cache=cache
+        target.task, skills, planner, policy=replace(policy, max_replans=20), plan_cache=cache
     )
     started = time.perf_counter()
     executive.execute()
     wall = time.perf_counter() - started
     r = executive.report
     return {
-        "reached": bool(r.goal_reached and setup.world.goal_reached()),
+        "reached": bool(r.goal_reached and world.goal_reached()),
         "executed": r.actions_executed,
         "failed": r.actions_failed,
         "planner_calls": r.planner_calls,
@@ -88,6 +139,7 @@ def mission(
         "retries": r.retries,
         "continues": r.continues,
         "repairs": r.repairs,
+        "repair_attempts": r.repair_attempts,
         "holds": r.holds,
         "reused": r.plans_reused,
         "planning_s": r.planning_time_s,
@@ -121,6 +173,7 @@ def summarise(name: str, problem: str, runs: list[dict[str, Any]]) -> dict[str, 
         "retries": mean("retries"),
         "continues": mean("continues"),
         "repairs": mean("repairs"),
+        "repair_attempts": mean("repair_attempts"),
         "holds": mean("holds"),
         "reused": mean("reused"),
         "planning_s": planning,
@@ -154,6 +207,28 @@ def recovery_section(
                     mission(folder, problem, seed, fail_rate, policy_named(policy), planner, cache)
                 )
             rows.append(summarise(policy, name, runs))
+    folder, problem = PROBLEMS[0]
+    for policy in SETBACK_POLICIES:
+        runs = []
+        for seed in range(seeds):
+            print(
+                f"  (f) setback {folder}/{problem} {policy} seed {seed}",
+                file=sys.stderr,
+                flush=True,
+            )
+            runs.append(
+                mission(
+                    folder,
+                    problem,
+                    seed,
+                    fail_rate,
+                    policy_named(policy),
+                    planner,
+                    PlanCache(),
+                    setback=True,
+                )
+            )
+        rows.append(summarise(policy, f"{folder}/{problem} (setback)", runs))
     return {"fail_rate": fail_rate, "seeds": seeds, "rows": rows}
 
 
@@ -164,7 +239,7 @@ def print_section(section: dict[str, Any], out: Any = print) -> None:
     )
     out(
         "| problem | policy | reached | actions | failed | planner calls | replans | retries "
-        "| continues | repairs | holds | reused | planning s | execution s | mission s "
+        "| continues | repairs (tried) | holds | reused | planning s | execution s | mission s "
         "| planning share (of the means) | median share | missions <= 30% | action ms for 30% |"
     )
     out(
@@ -175,7 +250,7 @@ def print_section(section: dict[str, Any], out: Any = print) -> None:
             f"| {r['problem']} | {r['policy']} | {r['reached']}/{r['missions']} | "
             f"{r['executed']:.1f} | {r['failed']:.1f} | {r['planner_calls']:.1f} | "
             f"{r['replans']:.1f} | {r['retries']:.1f} | {r['continues']:.1f} | "
-            f"{r['repairs']:.1f} | {r['holds']:.1f} | {r['reused']:.1f} | "
+            f"{r['repairs']:.1f} ({r['repair_attempts']:.1f}) | {r['holds']:.1f} | {r['reused']:.1f} | "
             f"{r['planning_s']:.3f} | {r['execution_s']:.3f} | {r['total_s']:.3f} | "
             f"{r['planning_share']:.0%} | {r['median_share']:.0%} | "
             f"{r['missions_within_30pct']}/{r['missions']} | {r['action_ms_for_30pct']:.1f} |"

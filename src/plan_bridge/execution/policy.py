@@ -27,6 +27,9 @@ class ReplanPolicy:
     """Skip ahead when the rest of the plan is valid from the belief."""
     repair: bool = True
     """Try a repair prefix before a full replan (STRIPS-style plans only)."""
+    redo_window: int = 3
+    """A repair first tries, without a planner, to re-do up to this many of the last
+    executed steps (a failure that undid them); 0: never."""
     repair_max_prefix_ratio: float = 0.5
     """Keep a repaired plan only if its new prefix is at most this fraction of the
     plan it rescues: a long detour means the old plan is a poor fit, so replan."""
@@ -53,7 +56,7 @@ class ReplanPolicy:
     """Total planning time of one execution, in seconds."""
 
     def __post_init__(self) -> None:
-        for name in ("max_step_retries", "max_replans"):
+        for name in ("max_step_retries", "max_replans", "redo_window"):
             if getattr(self, name) < 0:
                 raise ValueError(f"ReplanPolicy.{name} must be >= 0, got {getattr(self, name)}")
         for name in ("planner_timeout", "replan_timeout", "planning_time_budget"):

@@ -9,9 +9,13 @@ In order, within the policy's budgets:
    the belief (a fault that left the world as it was: no planner can do better than
    the plan in force), at most ``max_step_retries`` (3) times per step and plan; then
    run it with another **variant** of its skill, each variant once;
-3. **repair** (STRIPS-style plans): regress the goal through the rest of the plan to
-   the facts it needs, plan only a prefix that re-establishes the broken ones, and
-   keep ``prefix + rest`` if it is valid and short;
+3. **repair**: first without a planner, by re-doing the last executed steps (up to
+   ``redo_window``) when that makes the held plan valid again (a failure that
+   undid what they did: a block that slipped back; ``redo_window``); then
+   (STRIPS-style plans)
+   regress the goal through the rest of the plan to the facts it needs, plan only a
+   prefix that re-establishes the broken ones, and keep ``prefix + rest`` if it is
+   valid and short;
 4. **replan** from the belief (a reused plan for a state seen before, else the replan
    portfolio within the replan deadline). When that gives no plan while the held
    plan is still valid from the belief, **hold**: go on with the held plan instead of
@@ -27,7 +31,7 @@ from plan_bridge.execution.policy import ExecutionReport, ReplanPolicy
 from plan_bridge.execution.replanner import MissionEnded, Replanner
 from plan_bridge.execution.semantics import ActionModel
 from plan_bridge.execution.world import WorldState
-from plan_bridge.pddl.task import Fact, format_fact
+from plan_bridge.pddl.task import Fact, format_fact, parse_fact
 from plan_bridge.planning.planner import PlanStep
 from plan_bridge.skills.registry import SkillRegistry
 
@@ -107,6 +111,10 @@ class Recovery:
                     str(failed),
                 )
                 return rest
+            if policy.repair and policy.redo_window and not held_valid:
+                redone = self._redo(rest, reason, facts)
+                if redone is not None:
+                    return redone
             if policy.repair:
                 repaired = self._repair(rest, reason)
                 if repaired is not None:
@@ -150,6 +158,29 @@ class Recovery:
             if name not in tried:
                 tried.append(name)
                 return name
+        return None
+
+    def _redo(
+        self, rest: list[PlanStep], reason: str, facts: frozenset[Fact]
+    ) -> list[PlanStep] | None:
+        """Re-do the last executed steps if that makes ``rest`` valid again."""
+        history = self.report.executed[-self.policy.redo_window :]
+        if not history:
+            return None
+        done = [PlanStep(f[0], tuple(f[1:])) for f in (parse_fact(s) for s in history)]
+        limit = max(1, int(self.policy.repair_max_prefix_ratio * len(rest)))
+        for count in range(1, min(len(done), limit) + 1):
+            prefix = done[-count:]
+            if self.model.check_plan([*prefix, *rest], facts).valid:
+                self.report.repairs += 1
+                self.generation += 1
+                self.decide(
+                    "repair",
+                    f"{reason}; re-doing {', '.join(str(s) for s in prefix)} makes the plan "
+                    "valid again (no planner call)",
+                    "",
+                )
+                return [*prefix, *rest]
         return None
 
     def _repair(self, rest: list[PlanStep], reason: str) -> list[PlanStep] | None:

@@ -190,7 +190,9 @@ def test_lean_copy_writes_the_same_pddl_as_the_original(bench: Path) -> None:
         assert lean_copy(task.problem).kind == task.problem.kind
 
 
-def _gripper_with_a_slip(task: PlanningTask) -> tuple[Executive, list[PlanComputed]]:
+def _gripper_with_a_slip(
+    task: PlanningTask, policy: ReplanPolicy | None = None
+) -> tuple[Executive, list[PlanComputed]]:
     """An executive whose first ``move rooma roomb`` ends with the robot back in rooma."""
     world = SimulatedWorld(task)
     skills = symbolic_skills(world)
@@ -218,19 +220,33 @@ def _gripper_with_a_slip(task: PlanningTask) -> tuple[Executive, list[PlanComput
             return "succeeded" if ok else "aborted"
 
     skills.add("move", SlippingMove)
-    return Executive(task, skills, "fast-downward"), []
+    return Executive(task, skills, "fast-downward", policy=policy), []
 
 
 @pytest.mark.timeout(60)
 def test_executive_repair_plans_only_the_missing_prefix(bench: Path) -> None:
     task = gripper(bench)
-    executive, plans = _gripper_with_a_slip(task)
+    executive, plans = _gripper_with_a_slip(task, ReplanPolicy(redo_window=0))
     executive.add_listener(lambda e: plans.append(e) if isinstance(e, PlanComputed) else None)
     assert executive.execute() == "succeeded"
     assert executive.report.repairs == 1, executive.report.decisions
     repair = next(p for p in plans if p.reason.startswith("repair"))
     assert repair.steps == ("(move rooma roomb)",)
     assert executive.report.goal_reached
+
+
+@pytest.mark.timeout(60)
+def test_a_step_the_world_undid_is_redone_without_a_planner_call(bench: Path) -> None:
+    task = gripper(bench)
+    executive, plans = _gripper_with_a_slip(task)
+    executive.add_listener(lambda e: plans.append(e) if isinstance(e, PlanComputed) else None)
+    assert executive.execute() == "succeeded"
+    report = executive.report
+    assert report.repairs == 1 and report.repair_attempts == 0
+    assert report.planner_calls == 1 and len(plans) == 1
+    repair = next(d for d in report.decisions if d["decision"] == "repair")
+    assert "re-doing (move rooma roomb)" in repair["reason"]
+    assert len(report.executed) == 11 + 1  # the 11-step plan and the re-done move
 
 
 @pytest.mark.timeout(60)
