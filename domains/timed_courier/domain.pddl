@@ -2,7 +2,7 @@
 ; robot must hold open while the courier passes (two durative actions that must
 ; overlap). Battery, distances, speeds and the count of deliveries are numbers.
 (define (domain timed-courier)
-  (:requirements :strips :typing :durative-actions :numeric-fluents)
+  (:requirements :strips :typing :durative-actions :duration-inequalities :numeric-fluents)
   (:types robot room parcel)
   (:predicates
     (at ?r - robot ?x - room)

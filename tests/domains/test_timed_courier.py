@@ -51,3 +51,37 @@ def test_with_late_halfway_and_drifting_actions_the_courier_replans_to_the_goal(
     # What the world really drained is what the belief holds (observed numbers).
     true_level = world.values["(charge-level courier)"]  # type: ignore[attr-defined]
     assert executive.belief.values[("charge-level", "courier")] == pytest.approx(true_level)
+
+
+def test_check_names_the_kind_and_the_engines(capsys: pytest.CaptureFixture[str]) -> None:
+    from plan_bridge.cli import main
+
+    assert main(["check", str(FOLDER)]) == 0
+    out = capsys.readouterr().out
+    assert "p01.pddl: temporal+numeric problem, planned by kairos then tamer" in out
+
+
+def test_plan_json_gives_start_duration_and_makespan(capsys: pytest.CaptureFixture[str]) -> None:
+    import json
+
+    from plan_bridge.cli import main
+
+    domain, problem = FOLDER / "domain.pddl", FOLDER / "problems" / "p01.pddl"
+    assert main(["plan", str(domain), str(problem), "--json"]) == 0
+    payload = json.loads(capsys.readouterr().out)
+    assert payload["planner"] == "kairos"
+    ends = [a["start"] + a["duration"] for a in payload["actions"]]
+    assert payload["makespan"] == pytest.approx(max(ends))
+
+
+def test_run_json_adds_planned_and_executed_makespans(capsys: pytest.CaptureFixture[str]) -> None:
+    import json
+
+    from plan_bridge.cli import main
+
+    code = main(["run", str(FOLDER), "--problem", "p01", "--json", "--quiet"])
+    captured = capsys.readouterr()
+    assert code == 0, captured.err + captured.out
+    payload = json.loads(captured.out)
+    assert payload["goal_reached"] is True
+    assert payload["makespan_planned"] > 0 and payload["makespan_executed"] >= 0

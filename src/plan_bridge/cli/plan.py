@@ -74,7 +74,19 @@ def _run_plan(args: argparse.Namespace) -> int:
     except PlanBridgeError as exc:
         return fail(str(exc))
     planner = planners[0]
-    progress(f"planning with {planner.name} (timeout {args.timeout:g} s)...")
+    from plan_bridge.planning.engines import AutoPlanner, problem_kind
+
+    shown = planner.name
+    if isinstance(planner, AutoPlanner):
+        try:
+            engines = planner.engines(task)
+        except PlanBridgeError as exc:
+            return fail(str(exc))
+        shown = engines[0]
+        if not problem_kind(task).classical:
+            rest = f"; then {', '.join(engines[1:])} if it fails" if engines[1:] else ""
+            shown += f" ({problem_kind(task).name} problem{rest})"
+    progress(f"planning with {shown} (timeout {args.timeout:g} s)...")
     try:
         result = planner.solve(task, timeout=args.timeout)
     except PddlError as exc:
@@ -98,9 +110,10 @@ def _run_plan(args: argparse.Namespace) -> int:
                 )  # temporal plans: start time, then [duration]
                 length = f" [{step.duration:g}]" if step.duration is not None else ""
                 print(f"{number:>{width}}. {timing}{step}{length}")
+            makespan = "" if result.makespan is None else f", makespan {result.makespan:g} s"
             print(
                 f"solved: {len(result.actions)} actions in {result.planning_time_s:.2f} s "
-                f"with {result.planner}"
+                f"with {result.planner}{makespan}"
             )
         else:
             print(

@@ -55,8 +55,9 @@ def _configure_run(parser: argparse.ArgumentParser) -> None:
     add_input_arguments(parser, optional=True)
     parser.add_argument(
         "--planner",
-        default="fast-downward",
-        help="unified-planning engine (default: fast-downward)",
+        default="auto",
+        help="unified-planning engine (default: auto: Fast Downward for classical "
+        "problems, Kairos or TAMER for temporal and numeric ones)",
     )
     parser.add_argument(
         "--seed", type=_non_negative_int, default=0, help="seed of the simulated faults (default 0)"
@@ -320,6 +321,12 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
     if robot is None and hasattr(world, "time_scale"):
         default_scale = VIEWER_TIME_SCALE if args.viewer is not None else 0.0
         world.time_scale = default_scale if args.time_scale is None else args.time_scale
+        # A temporal plan plays its timeline at the world's pace.
+        executive.time_scale = float(world.time_scale)
+    from plan_bridge.execution.temporal import TimelineRecorder
+
+    timeline = TimelineRecorder()
+    executive.add_listener(timeline)
     if checkpoint is not None:
         if checkpoint.get("world") is not None and hasattr(world, "restore"):
             world.restore(checkpoint["world"])
@@ -412,6 +419,10 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
             "planner": planner.name,
             **report.to_json(),
         }
+        if timeline.temporal:
+            data["makespan_planned"] = timeline.makespan_planned
+            executed = timeline.makespan_executed
+            data["makespan_executed"] = None if executed is None else round(executed, 4)
         if faults is not None:
             data["faults_injected"] = faults
         if hasattr(world, "sim_time"):
@@ -535,6 +546,16 @@ def _check(args: argparse.Namespace) -> int:
             f"{problem.name}: {len(loaded.task.actions)} actions, {len(loaded.task.objects)} objects, "
             f"{len(loaded.task.goal_facts)} goal atoms",
             file=sys.stderr,
+        )
+        from plan_bridge.planning.engines import engines_for, problem_kind
+
+        try:
+            engines = engines_for(loaded.task)  # raises when no installed engine fits
+        except PlanBridgeError as exc:
+            return fail(f"{problem.name}: {exc}")
+        print(
+            f"{problem.name}: {problem_kind(loaded.task).name} problem, planned by "
+            f"{' then '.join(engines)} (--planner auto)"
         )
     if problems_found:
         return fail(f"{len(problems_found)} problem(s):\n  " + "\n  ".join(problems_found))

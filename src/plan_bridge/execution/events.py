@@ -21,6 +21,8 @@ class PlanComputed(Event):
     steps: tuple[str, ...]
     planning_time_s: float
     explanation: str = ""
+    makespan: float | None = None
+    """When the last action of a temporal plan ends (plan seconds); None if sequential."""
 
 
 @dataclass(slots=True, kw_only=True)

@@ -396,6 +396,7 @@ class Executive(smach.Container):
                     steps=tuple(str(s) for s in result.actions),
                     planning_time_s=result.planning_time_s,
                     explanation=result.explanation,
+                    makespan=result.makespan,
                 )
             )
 

@@ -35,7 +35,8 @@ class ReplanPolicy:
     plan it rescues: a long detour means the old plan is a poor fit, so replan."""
     replan: bool = True
     max_replans: int = 10
-    """Planner calls after the first one (repairs and replans)."""
+    """Plans adopted after the first one (redos, repairs, replans): the bound that
+    keeps a failure that comes back from looping."""
     planner_timeout: float = 60.0
     """Hard limit of one planner call, in seconds."""
     replan_timeout: float = 20.0

@@ -9,17 +9,22 @@ In order, within the policy's budgets:
    the belief (a fault that left the world as it was: no planner can do better than
    the plan in force), at most ``max_step_retries`` (3) times per step and plan; then
    run it with another **variant** of its skill, each variant once;
-3. **repair**: first without a planner, by re-doing the last executed steps (up to
-   ``redo_window``) when that makes the held plan valid again (a failure that
-   undid what they did: a block that slipped back; ``redo_window``); then
-   (STRIPS-style plans)
-   regress the goal through the rest of the plan to the facts it needs, plan only a
+3. **repair** (sequential plans): first without a planner, by re-doing the last
+   executed steps (up to ``redo_window``) when that makes the held plan valid again
+   (a failure that undid what they did: a block that slipped back); then
+   (STRIPS-style plans) regress the goal through the rest of the plan to the facts it needs, plan only a
    prefix that re-establishes the broken ones, and keep ``prefix + rest`` if it is
    valid and short;
 4. **replan** from the belief (a reused plan for a state seen before, else the replan
    portfolio within the replan deadline). When that gives no plan while the held
    plan is still valid from the belief, **hold**: go on with the held plan instead of
    aborting (the planner's time-out says nothing against a plan that still works).
+
+Every plan adopted after the first one (a redo, a planned repair, a replan) counts
+against ``max_replans``: a failure that keeps coming back ends the mission instead
+of looping. Retries start afresh with each adopted plan, so they are bounded too.
+A temporal plan is never re-done: its steps' times and overlaps would be lost (the
+hold-door must overlap the pass-door), so it goes to the planner.
 """
 
 from __future__ import annotations
@@ -30,6 +35,7 @@ from plan_bridge.execution.compile import StepRecord
 from plan_bridge.execution.policy import ExecutionReport, ReplanPolicy
 from plan_bridge.execution.replanner import MissionEnded, Replanner
 from plan_bridge.execution.semantics import ActionModel
+from plan_bridge.execution.temporal import is_temporal
 from plan_bridge.execution.world import WorldState
 from plan_bridge.pddl.task import Fact, format_fact, parse_fact
 from plan_bridge.planning.planner import PlanStep
@@ -111,11 +117,14 @@ class Recovery:
                     str(failed),
                 )
                 return rest
-            if policy.repair and policy.redo_window and not held_valid:
+            # Within budget: the next adopted plan may be a repair (else the replan
+            # below ends the mission with the budget's message).
+            repair = policy.repair and self.replanner.budgeted_calls <= policy.max_replans
+            if repair and policy.redo_window and not held_valid and not is_temporal(rest):
                 redone = self._redo(rest, reason, facts)
                 if redone is not None:
                     return redone
-            if policy.repair:
+            if repair:
                 repaired = self._repair(rest, reason)
                 if repaired is not None:
                     return repaired
@@ -173,6 +182,7 @@ class Recovery:
             prefix = done[-count:]
             if self.model.check_plan([*prefix, *rest], facts).valid:
                 self.report.repairs += 1
+                self.replanner.budgeted_calls += 1  # a redo can fail again: bounded
                 self.generation += 1
                 self.decide(
                     "repair",

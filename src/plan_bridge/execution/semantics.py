@@ -357,10 +357,18 @@ class GroundAction:
         """Whether the action can start in ``facts``: its preconditions hold (for a
         durative action: the at-start conditions, and the over-all conditions in the
         state its at-start effects make)."""
-        b = self._binding
-        if not all(cond(b, facts) for _, cond in self._lifted.precondition_parts):
+        if not self.startable(facts):
             return False
         return not self._lifted.invariant_parts or not self.unmet_invariant(self._started(facts))
+
+    def startable(self, facts: Facts) -> bool:
+        """Whether the at-start conditions hold in ``facts`` (all preconditions of an
+        instantaneous action). Unlike :meth:`applicable`, the over-all conditions are
+        not asked for: in PDDL 2.1 they must hold only after the start, so an action
+        starting at the same instant may still establish them (the door another robot
+        begins to hold)."""
+        b = self._binding
+        return all(cond(b, facts) for _, cond in self._lifted.precondition_parts)
 
     def unmet_preconditions(self, facts: Facts) -> list[str]:
         """The precondition parts that do not hold, as text with the arguments bound

@@ -78,6 +78,7 @@ __all__ = [
     "Edge",
     "TemporalDispatch",
     "TimedStepState",
+    "TimelineRecorder",
     "compile_temporal",
     "end_precedence",
     "is_temporal",
@@ -126,6 +127,38 @@ class ActionEnded(Event):
     planned_duration: float
     actual_start: float
     actual_end: float
+
+
+class TimelineRecorder:
+    """A listener for the makespans of a run: planned (of the first temporal plan) and
+    executed (wall seconds from the first action's start to the last one's end)."""
+
+    def __init__(self) -> None:
+        self.makespan_planned: float | None = None
+        self._first: float | None = None
+        self._last: float | None = None
+
+    def __call__(self, event: Event) -> None:
+        from plan_bridge.execution.events import PlanComputed
+
+        if isinstance(event, PlanComputed):
+            if self.makespan_planned is None and event.makespan is not None:
+                self.makespan_planned = event.makespan
+        elif isinstance(event, ActionStarted):
+            if self._first is None:
+                self._first = event.time
+        elif isinstance(event, ActionEnded):
+            self._last = event.time
+
+    @property
+    def temporal(self) -> bool:
+        return self.makespan_planned is not None
+
+    @property
+    def makespan_executed(self) -> float | None:
+        if self._first is None or self._last is None:
+            return None
+        return self._last - self._first
 
 
 # -- the temporal network ------------------------------------------------------------------
@@ -421,6 +454,12 @@ class _Dispatch:
     outcomes: dict[int, str] = field(default_factory=dict)
     failure: str | None = None
     errors: list[BaseException] = field(default_factory=list)
+    holding: set[int] = field(default_factory=set)
+    """Steps whose skills are done and whose ends wait for points not yet happened."""
+    released: set[int] = field(default_factory=set)
+    """Held steps let go because nothing else could happen: every running step was
+    held and no step could start (a step the plan needs first cannot start), so the
+    plan's order cannot be kept; their ends go ahead and the failure shows."""
 
 
 class TemporalDispatch(smach.Container):
@@ -562,13 +601,24 @@ class TemporalDispatch(smach.Container):
     def _await_end(self, run: _Dispatch, i: int) -> None:
         """Hold step ``i``'s end until its end predecessors happened (or the run stops)."""
         with self._wake:
-            while not (run.failure is not None or self._preempt_requested or run.errors):
-                if all(
-                    edge.before in (run.started if edge.point == "start" else run.ended)
-                    for edge in self.end_waits[i]
+            try:
+                while not (
+                    run.failure is not None
+                    or self._preempt_requested
+                    or run.errors
+                    or i in run.released
                 ):
-                    return
-                self._wake.wait()
+                    if all(
+                        edge.before in (run.started if edge.point == "start" else run.ended)
+                        for edge in self.end_waits[i]
+                    ):
+                        return
+                    if i not in run.holding:
+                        run.holding.add(i)
+                        self._wake.notify_all()  # the loop looks whether all are held
+                    self._wake.wait()
+            finally:
+                run.holding.discard(i)
 
     def _poke(self) -> None:
         with self._wake:
@@ -583,6 +633,9 @@ class TemporalDispatch(smach.Container):
                     due = self._start_ready(run)
                 if not run.running and (stopping or not run.waiting):
                     return
+                if run.running and due is None and run.holding >= set(run.running):
+                    run.released |= run.holding  # nothing else can happen: let go
+                    self._wake.notify_all()
                 if not run.running and due is None and run.waiting:
                     # Nothing runs and nothing is due: start the first waiting step
                     # whose predecessors happened, so that it reports why it cannot.

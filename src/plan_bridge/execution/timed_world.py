@@ -2,7 +2,9 @@
 
 :class:`TimedWorld` holds the true facts *and* the true numbers (``(battery r1)``).
 A :class:`TimedSkill` plays one durative action against it: the at-start conditions
-are checked and the at-start effects applied when it starts, the action lasts its
+are checked (not yet the over-all ones: an action planned to start with the one that
+establishes them may begin a moment earlier) and the at-start effects applied when it
+starts, the action lasts its
 duration (times :attr:`TimedWorld.time_scale` wall seconds per plan second, checking
 for a preempt every few milliseconds), then the over-all and at-end conditions are
 checked on the true world and the at-end effects applied. It reports what it saw of
@@ -85,7 +87,10 @@ class TimedWorld(SimulatedWorld):
         with self._lock:
             self.actions_run += 1
             state = self.state_now()
-            if not ground.applicable(state):
+            # At-start conditions only: the over-all ones are checked when it ends
+            # (a step planned to start with the one that establishes them may begin
+            # a moment before it, as two robots would).
+            if not ground.startable(state):
                 return False, set()
             faults = {kind for kind in ("late", "halfway", "drift") if self.chance(kind)}
             for kind in sorted(faults):

@@ -12,13 +12,21 @@ import json
 import os
 import platform
 import socket
+import subprocess
 import sys
 import time
 from importlib import metadata
 from pathlib import Path
 from typing import Any
 
-__all__ = ["PACKAGES", "PLANNER_PACKAGES", "machine_info", "read_sessions", "record_session"]
+__all__ = [
+    "PACKAGES",
+    "PLANNER_PACKAGES",
+    "machine_info",
+    "read_sessions",
+    "record_session",
+    "source_revision",
+]
 
 #: Distributions whose versions the report records.
 PACKAGES = (
@@ -57,6 +65,32 @@ def cpu_model() -> str:
     return platform.processor() or platform.machine() or "unknown"
 
 
+def source_revision() -> str:
+    """The git commit of the plan_bridge source in use, ``+dirty`` if it has local edits.
+
+    Empty when plan_bridge is not run from a git checkout (an installed wheel).
+    """
+    folder = Path(__file__).resolve().parent
+    try:
+        head = subprocess.run(
+            ["git", "-C", str(folder), "rev-parse", "HEAD"],
+            capture_output=True,
+            text=True,
+            timeout=10,
+            check=True,
+        ).stdout.strip()
+        dirty = subprocess.run(
+            ["git", "-C", str(folder), "status", "--porcelain", "--untracked-files=no"],
+            capture_output=True,
+            text=True,
+            timeout=10,
+            check=True,
+        ).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return ""
+    return head + ("+dirty" if dirty else "")
+
+
 def machine_info() -> dict[str, Any]:
     """This process's machine: host, CPU, OS, Python and package versions."""
     return {
@@ -79,6 +113,7 @@ def record_session(out: Path, *, executor: str, workers: dict[str, dict[str, Any
             "executor": executor,
             "argv": sys.argv[1:],
             "writer": machine_info(),
+            "source": source_revision(),
             "workers": workers,
         }
     )

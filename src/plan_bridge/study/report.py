@@ -265,8 +265,13 @@ def _setup_section(
     if sessions:
         lines.append(
             "- Executed by: "
-            + "; ".join(f"{s.get('executor', '?')} ({s.get('started', '?')})" for s in sessions)
-            + "."
+            + "; ".join(
+                f"{s.get('executor', '?')} ({s.get('started', '?')}"
+                + (f", source {s['source']}" if s.get("source") else "")
+                + ")"
+                for s in sessions
+            )
+            + ". A source marked +dirty had uncommitted edits."
         )
     for (host, cpu, count), systems in sorted(machines.items()):
         lines.append(f"- Machine `{host}`: {cpu}, {count} CPUs; {'; '.join(sorted(systems))}.")

@@ -191,9 +191,10 @@ def test_lean_copy_writes_the_same_pddl_as_the_original(bench: Path) -> None:
 
 
 def _gripper_with_a_slip(
-    task: PlanningTask, policy: ReplanPolicy | None = None
+    task: PlanningTask, policy: ReplanPolicy | None = None, *, always: bool = False
 ) -> tuple[Executive, list[PlanComputed]]:
-    """An executive whose first ``move rooma roomb`` ends with the robot back in rooma."""
+    """An executive whose first (``always``: every) ``move rooma roomb`` ends with the
+    robot back in rooma."""
     world = SimulatedWorld(task)
     skills = symbolic_skills(world)
     slipped: list[bool] = []
@@ -207,7 +208,7 @@ def _gripper_with_a_slip(
 
         def execute(self, ud: smach.UserData) -> str:
             ok, observations = world.perform(PlanStep("move", self.args))
-            if not slipped and self.args == ("rooma", "roomb"):
+            if (always or not slipped) and self.args == ("rooma", "roomb"):
                 slipped.append(True)
                 with world._lock:
                     world._facts -= {("at-robby", "roomb")}
@@ -247,6 +248,20 @@ def test_a_step_the_world_undid_is_redone_without_a_planner_call(bench: Path) ->
     repair = next(d for d in report.decisions if d["decision"] == "repair")
     assert "re-doing (move rooma roomb)" in repair["reason"]
     assert len(report.executed) == 11 + 1  # the 11-step plan and the re-done move
+
+
+@pytest.mark.timeout(60)
+def test_a_step_the_world_always_undoes_ends_the_mission_when_the_budget_is_spent(
+    bench: Path,
+) -> None:
+    task = gripper(bench)
+    executive, _ = _gripper_with_a_slip(task, ReplanPolicy(max_replans=3), always=True)
+    assert executive.execute() == "aborted"
+    report = executive.report
+    assert report.explanation.startswith("replanning budget exhausted (3 replans)")
+    redone = [d for d in report.decisions if d["decision"] == "repair"]
+    assert len(redone) == 3  # three plans adopted after the first, then no more
+    assert report.decisions[-1]["decision"] == "replan"
 
 
 @pytest.mark.timeout(60)

@@ -15,6 +15,7 @@ from plan_bridge.execution.temporal import (
     ActionEnded,
     ActionStarted,
     TemporalDispatch,
+    end_precedence,
     precedence,
 )
 from plan_bridge.execution.world import WorldState
@@ -154,6 +155,20 @@ def test_the_finish_policy_lets_the_other_running_steps_complete(task: PlanningT
     assert rows["(hold-light lamp yard)"]["outcome"] == "succeeded"
     assert rows["(inspect scout yard)"]["outcome"] == "invalid"
     assert ("light-on", "yard") not in belief  # its at-end effect was applied
+
+
+def test_a_held_end_is_let_go_when_the_step_it_waits_for_can_never_start(
+    task: PlanningTask,
+) -> None:
+    # The light is held until the inspection ends, but the scout is docked: the
+    # inspection cannot start, so the holder is let go instead of waiting forever.
+    steps = [PLAN[0], PlanStep("inspect", ("scout", "yard"), 0.01, 2.0)]
+    assert (1, "end") in {(e.before, e.point) for e in end_precedence(steps, ActionModel(task))[0]}
+    outcome, dispatch, _, _ = run(task, skills_with(), steps)
+    assert outcome == "invalid"
+    rows = {row["action"]: row for row in dispatch.timeline()}
+    assert rows["(hold-light lamp yard)"]["outcome"] == "succeeded"
+    assert rows["(inspect scout yard)"]["outcome"] == "invalid"
 
 
 def test_time_scale_plays_the_plan_timeline(task: PlanningTask) -> None:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -80,6 +81,9 @@ def test_report_records_setup_compares_approaches_and_captions_every_plot(tmp_pa
     assert "unified-planning " in text and "fast-downward (up-fast-downward " in text
     assert "CPUs" in text and "seeds 0-1" in text and "runs per cell" in text
     assert "| rooms | step-fails | 1 |" in text
+    assert "Executed by: local, 2 processes" in text
+    if shutil.which("git"):
+        assert ", source " in text  # the commit the rows were computed with
     # comparisons with tests and p-values
     assert "Fisher exact" in text and "Mann-Whitney U" in text and "p (Holm)" in text
     with (tmp_path / "comparisons.csv").open() as f:
