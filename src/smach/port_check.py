@@ -19,7 +19,7 @@ Each finding has a kind: ``change`` (the program fails until edited), ``differs`
 and literal: keys or labels built at run time are not followed. Every difference
 is explained in docs/porting-from-smach.md.
 
-(About 650 lines, over the usual 600: the rule tables and the walk that applies
+(Over 600 lines: the rule tables and the walk that applies
 them are read together; splitting them would only add an import.)
 """
 

@@ -22,6 +22,10 @@ at-end effects (:meth:`GroundAction.unmet_at_end`); :meth:`GroundAction.start_ef
 and :meth:`GroundAction.end_effects` are the two halves, and :meth:`GroundAction.effects`
 their composition (start, then end), which is what sequential simulation, plan
 checks and repair use.
+
+(Over 600 lines: the compiler of UP expressions into closures and the ground
+actions that evaluate them share private closure types and caches; split, each half
+would export the other's internals.)
 """
 
 from __future__ import annotations

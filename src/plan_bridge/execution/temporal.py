@@ -45,6 +45,9 @@ from the belief as for sequential plans.
 Events: every step emits :class:`ActionStarted` and :class:`ActionEnded` with its
 planned and actual (wall, since the dispatch began) times, on the same stream as
 every other event: journal, viewer timeline and study read the same records.
+
+(Over 600 lines: the temporal network, the timed step and the dispatcher that runs
+them are one mechanism; its invariants about start and end points are read together.)
 """
 
 from __future__ import annotations

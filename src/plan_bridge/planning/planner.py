@@ -11,6 +11,10 @@ e.g. the goal atoms that are unreachable even under delete relaxation.
 
 Every solve runs in a warm worker process (:mod:`plan_bridge.planning.worker`) that is
 killed at the deadline, so ``timeout`` holds for engines that ignore it.
+
+(Over 600 lines: the protocol, its result types and the unified-planning adapter
+that fills them are read together; the process pool lives in
+:mod:`plan_bridge.planning.worker` and engine choice in :mod:`.engines`.)
 """
 
 from __future__ import annotations

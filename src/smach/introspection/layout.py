@@ -12,6 +12,9 @@ Collapsed containers are drawn as one box.
 
 Text is measured with the advance widths of Arial / Liberation Sans (the page's
 font), so boxes fit their labels without a browser.
+
+(Over 600 lines: one layout algorithm whose phases (rank, rows, columns, edges,
+text widths) are read top to bottom.)
 """
 
 from __future__ import annotations
