@@ -116,6 +116,8 @@ class ActionStarted(Event):
     planned_duration: float
     actual_start: float
     """Wall seconds since the dispatch began."""
+    time_scale: float = 0.0
+    """Wall seconds per plan second of the dispatch (0: as fast as it goes)."""
 
 
 @dataclass(slots=True, kw_only=True)
@@ -303,6 +305,8 @@ class TimedStepState(StepState):
         step = ground.step
         self.timing = Timing(step.start or 0.0, step.duration or 0.0)
         self.clock: Callable[[], float] = time.monotonic
+        #: The dispatch's wall seconds per plan second (told to the viewer's timeline).
+        self.time_scale = 0.0
         #: Called when the skill succeeded, before the end point: the dispatcher
         #: holds the end until the points planned before it have happened.
         self.before_end: Callable[[], None] | None = None
@@ -419,6 +423,7 @@ class TimedStepState(StepState):
                     planned_start=self.timing.planned_start,
                     planned_duration=self.timing.planned_duration,
                     actual_start=self.timing.actual_start,
+                    time_scale=self.time_scale,
                 )
             )
 
@@ -585,6 +590,7 @@ class TemporalDispatch(smach.Container):
 
         for index, state in enumerate(self._states.values()):
             state.clock = since_start
+            state.time_scale = self.time_scale
             state.before_end = lambda i=index: self._await_end(run, i)
         self._run_state = run
         self.belief.add_listener(self._poke)
