@@ -310,6 +310,10 @@ class TimedStepState(StepState):
         #: Called when the skill succeeded, before the end point: the dispatcher
         #: holds the end until the points planned before it have happened.
         self.before_end: Callable[[], None] | None = None
+        #: Held from reading the belief to applying the effects computed from it (the
+        #: dispatch shares one between its steps): two steps increasing the same
+        #: number at once must not both add to the old value.
+        self.effects_lock = threading.Lock()
         self._violation: list[str] = []
 
     def add(
@@ -336,14 +340,15 @@ class TimedStepState(StepState):
         self._violation = []
         started = time.monotonic()
         ground = self.ground
-        with self.belief.locked() as facts:
-            if self.check_preconditions and not ground.applicable(facts):
-                record.outcome = "invalid"
-                record.unmet = tuple(ground.unmet_preconditions(facts))
-                return self._finish(record, started)
-            adds, dels, values = ground.start_effects(facts)
-        self.belief.apply(adds, dels)
-        self.belief.set_values(values)
+        with self.effects_lock:
+            with self.belief.locked() as facts:
+                if self.check_preconditions and not ground.applicable(facts):
+                    record.outcome = "invalid"
+                    record.unmet = tuple(ground.unmet_preconditions(facts))
+                    return self._finish(record, started)
+                adds, dels, values = ground.start_effects(facts)
+            self.belief.apply(adds, dels)
+            self.belief.set_values(values)
         self._started()
         data = self._userdata._data
         data["action"] = ground.name
@@ -371,15 +376,16 @@ class TimedStepState(StepState):
             outcome = "aborted"
             record.unmet = ("over all: " + ", ".join(self._violation),)
         elif outcome == "succeeded":
-            with self.belief.locked() as facts:
-                unmet = ground.unmet_at_end(facts)
-                end = ground.end_effects(facts) if not unmet else (set(), set(), {})
+            with self.effects_lock:
+                with self.belief.locked() as facts:
+                    unmet = ground.unmet_at_end(facts)
+                    end = ground.end_effects(facts) if not unmet else (set(), set(), {})
+                if not unmet:
+                    self.belief.apply(end[0], end[1])
+                    self.belief.set_values(end[2])
             if unmet:
                 outcome = "aborted"
                 record.unmet = ("at end: " + ", ".join(unmet),)
-            else:
-                self.belief.apply(end[0], end[1])
-                self.belief.set_values(end[2])
         changed = self.belief.observe(observations)
         record.observations_changed = tuple(
             describe_observation(fact, truth) for fact, truth in changed
@@ -505,9 +511,11 @@ class TemporalDispatch(smach.Container):
         self.waits = precedence(self.steps, model)
         self.end_waits = end_precedence(self.steps, model)
         self._states: dict[str, TimedStepState] = {}
+        self._effects_lock = threading.Lock()
         self._order = list(labels)
         for label, state in zip(labels, states, strict=True):
             self._adopt_child(label, state)
+            state.effects_lock = self._effects_lock
             self._states[label] = state
         self._remappers: dict[str, smach.Remapper] = {}
         self._run_state: _Dispatch | None = None

@@ -189,3 +189,35 @@ def test_the_timed_check_accepts_overlap_and_refuses_a_broken_invariant(
     late_light = [PLAN[0], PLAN[1], PlanStep("inspect", ("scout", "yard"), 3.5, 2.0)]
     check = model.check_plan(late_light, facts)
     assert not check.valid and check.unmet == ("over all: (light-on yard)",)
+
+
+COUNTING = """
+(define (domain counting)
+  (:requirements :strips :typing :durative-actions :numeric-fluents)
+  (:types bot)
+  (:predicates (ready ?b - bot) (done ?b - bot))
+  (:functions (count))
+  (:durative-action tick
+    :parameters (?b - bot)
+    :duration (= ?duration 1)
+    :condition (at start (ready ?b))
+    :effect (and (at start (increase (count) 1)) (at end (done ?b))
+                 (at end (increase (count) 1)))))
+"""
+
+
+def test_overlapping_steps_increasing_one_number_lose_no_increase() -> None:
+    from plan_bridge.pddl.task import load_task_from_text
+
+    bots = [f"b{i}" for i in range(24)]
+    problem = (
+        f"(define (problem many) (:domain counting) (:objects {' '.join(bots)} - bot)"
+        f" (:init {' '.join(f'(ready {b})' for b in bots)} (= (count) 0))"
+        f" (:goal (>= (count) {2 * len(bots)})))"
+    )
+    counting = load_task_from_text(COUNTING, problem)
+    steps = [PlanStep("tick", (b,), 0.0, 1.0) for b in bots]
+    outcome, _, belief, _ = run(counting, skills_with(), steps)
+    assert outcome == "succeeded"
+    # Every step adds 1 at its start and 1 at its end, all at once in 24 threads.
+    assert belief.values[("count",)] == 2.0 * len(bots)
