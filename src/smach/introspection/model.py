@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from smach.introspection.compact import structure_of
+from smach.introspection.gantt import Timeline, gantt
 
 __all__ = ["History", "ViewModel", "active_at", "fold", "graft"]
 
@@ -66,6 +67,8 @@ class ViewModel:
     decisions: list[dict[str, Any]] = field(default_factory=list)
     steps: list[dict[str, Any]] = field(default_factory=list)
     running_step: str = ""
+    timeline: Timeline = field(default_factory=Timeline)
+    """Planned and actual intervals of the actions of temporal plans (the Gantt view)."""
 
     # -- folding ---------------------------------------------------------------------------
     def apply(self, record: Mapping[str, Any]) -> None:
@@ -94,6 +97,7 @@ class ViewModel:
             self.active.clear()
         self.active[path] = None
         self.error_paths.pop(path, None)
+        self.timeline.container_started(path)
 
     def _entered(self, path: str, record: Mapping[str, Any]) -> None:
         self.active[path] = None
@@ -225,6 +229,12 @@ class ViewModel:
                     break
             break
 
+    def _action_started(self, path: str, record: Mapping[str, Any]) -> None:
+        self.timeline.started(path, record, len(self.plans))
+
+    def _action_ended(self, path: str, record: Mapping[str, Any]) -> None:
+        self.timeline.ended(path, record)
+
     def _observations(self, path: str, record: Mapping[str, Any]) -> None:
         changed = [str(c) for c in record.get("changed", ()) or ()]
         if self.steps and self.steps[-1]["path"] == path:
@@ -275,6 +285,7 @@ class ViewModel:
             decisions=list(self.decisions),
             steps=list(self.steps),
             running_step=self.running_step,
+            timeline=self.timeline.copy(),
         )
 
     def to_json(self) -> dict[str, Any]:
@@ -300,6 +311,7 @@ class ViewModel:
             "decisions": self.decisions,
             "steps": self.steps,
             "running_step": self.running_step,
+            "gantt": gantt(self.timeline, self.time),
         }
 
 
@@ -320,6 +332,8 @@ _HANDLERS = {
     "executive_decision": ViewModel._decision,
     "step_finished": ViewModel._step_finished,
     "observations_applied": ViewModel._observations,
+    "action_started": ViewModel._action_started,
+    "action_ended": ViewModel._action_ended,
 }
 
 

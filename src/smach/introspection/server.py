@@ -45,6 +45,8 @@ STATIC = {
     "app.css": "text/css; charset=utf-8",
     "graph.css": "text/css; charset=utf-8",
     "control.js": "text/javascript; charset=utf-8",
+    "gantt.js": "text/javascript; charset=utf-8",
+    "gantt.css": "text/css; charset=utf-8",
 }
 MAX_RECORDS_PER_MESSAGE = 300
 MAX_RECORDS_PER_REQUEST = 2000

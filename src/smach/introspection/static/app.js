@@ -467,6 +467,8 @@ function describe(r) {
     case "plan_computed": return `${r.reason}: ${r.status}, ${(r.steps || []).length} steps (${r.planner}, ${Number(r.planning_time_s || 0).toFixed(2)} s)`;
     case "executive_decision": return `${r.decision}: ${r.reason}`;
     case "step_finished": return `step ${r.index} ${r.action} → ${r.outcome}`;
+    case "action_started": return `step ${r.index} ${r.action} started (planned at ${r.planned_start} for ${r.planned_duration} plan s)`;
+    case "action_ended": return `step ${r.index} ${r.action} ended: ${r.outcome}`;
     case "observations_applied": return `observed ${(r.changed || []).join(", ")}`;
     case "control": return `${r.action} (from ${r.source})${r.details && r.details.reason ? ": " + r.details.reason : ""} → ${r.state}`;
     default: return short(r, 200);
@@ -565,6 +567,7 @@ function applyView(view, force = false) {
   $("notice").textContent = notes.join(" · ");
   document.body.dataset.index = String(view.index);
   updateCursor(view);
+  document.dispatchEvent(new CustomEvent("smach:view", { detail: view })); // gantt.js
 }
 
 let seekTimer = null;

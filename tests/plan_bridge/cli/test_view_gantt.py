@@ -1,0 +1,149 @@
+"""The Gantt view of a temporal mission's journal, in headless Chromium (Playwright,
+Debian's chromium; skipped when either is missing). A screenshot goes to
+artifacts/viewer/ (gitignored)."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from plan_bridge.cli import main
+from smach.introspection import JournalSource, serve
+from smach.introspection.journal import read_journal
+from smach.introspection.model import fold
+
+pytestmark = pytest.mark.browser
+
+REPO = Path(__file__).parents[3]
+DOMAINS = REPO / "domains"
+ARTIFACTS = REPO / "artifacts" / "viewer"
+CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
+ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking"]
+
+
+@pytest.fixture(scope="module")
+def journal(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """timed_courier, seed 3, fail rate 0.3: failed actions, a replan (several dispatches)."""
+    path = tmp_path_factory.mktemp("gantt") / "run.jsonl"
+    main(
+        [
+            "run",
+            str(DOMAINS / "timed_courier"),
+            "--problem",
+            "p01",
+            "--seed",
+            "3",
+            "--fail-rate",
+            "0.3",
+            "--time-scale",
+            "0.005",
+            "--journal",
+            str(path),
+            "--quiet",
+        ]
+    )
+    return path
+
+
+@pytest.fixture(scope="module")
+def browser() -> Iterator[Any]:
+    sync_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
+    if not Path(CHROMIUM).exists():
+        pytest.skip("chromium is not installed")
+    with sync_api.sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
+        yield b
+        b.close()
+
+
+def _rows(page: Any) -> list[dict[str, Any]]:
+    script = """els => els.map(g => {
+        const p = g.querySelector('rect.gantt-planned'), a = g.querySelector('rect.gantt-actual');
+        return {index: Number(g.dataset.index), outcome: g.dataset.outcome,
+                planned: p ? Number(p.getAttribute('width')) : 0,
+                actual: a ? Number(a.getAttribute('width')) : 0,
+                label: g.querySelector('text.gantt-label').textContent};
+    })"""
+    rows: list[dict[str, Any]] = page.eval_on_selector_all("#gantt-chart g.gantt-row", script)
+    return rows
+
+
+def test_the_journal_of_a_temporal_mission_folds_into_one_gantt_row_per_started_action(
+    journal: Path,
+) -> None:
+    header, records = read_journal(journal)
+    started = [r for r in records if r["kind"] == "action_started"]
+    ended = {r["path"] + str(r["time"]): r for r in records if r["kind"] == "action_ended"}
+    view = fold(header, records).to_json()["gantt"]
+    assert view["axis"] == "plan" and view["time_scale"] == 0.005
+    # A new dispatch for the replan's plan and the retry's: every one has its rows.
+    assert view["dispatches"] >= 2
+    assert {r["dispatch"] for r in view["rows"]} == set(range(view["dispatches"]))
+    assert [r["index"] for r in view["rows"]] == [r["index"] for r in started]
+    assert len(ended) == len(started) and not any(r["running"] for r in view["rows"])
+    for row, record in zip(view["rows"], started, strict=True):
+        assert row["planned_start"] == record["planned_start"]
+        assert row["p1"] - row["p0"] == pytest.approx(record["planned_duration"])
+        assert row["a1"] >= row["a0"] >= 0
+
+
+@pytest.mark.timeout(120)
+def test_the_replay_page_draws_planned_and_actual_bars_of_every_action_up_to_the_slider(
+    browser: Any, journal: Path
+) -> None:
+    _, records = read_journal(journal)
+    started = [r for r in records if r["kind"] == "action_started"]
+    outcomes = [r["outcome"] for r in records if r["kind"] == "action_ended"]
+    page = browser.new_page(viewport={"width": 1400, "height": 900})
+    errors: list[str] = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    with serve(JournalSource(journal), quiet=True) as viewer:
+        page.goto(viewer.url)
+        page.wait_for_selector("body[data-ready='1']", timeout=10_000)
+        page.wait_for_selector(f"#gantt-toggle:text-is('Gantt ({len(started)})')")
+        page.click("#gantt-toggle")
+        page.wait_for_selector(f"body[data-gantt-drawn='{len(started)}']")
+        rows = _rows(page)
+        assert sorted(r["index"] for r in rows) == sorted(r["index"] for r in started)
+        assert all(r["planned"] > 0 and r["actual"] > 0 for r in rows)
+        assert sorted(r["outcome"] for r in rows) == sorted(outcomes)
+        assert "aborted" in outcomes  # the seed's faults show as red bars
+        assert "(hand-over courier box1 depot)" in " ".join(r["label"] for r in rows)
+        assert "plan seconds" in page.inner_text("#gantt-note")
+        assert page.is_visible("#gantt-axis text.gantt-unit")
+        ARTIFACTS.mkdir(parents=True, exist_ok=True)
+        page.screenshot(path=str(ARTIFACTS / "gantt-replay.png"))
+        # The slider right after the fifth start: five bars, the unfinished ones running.
+        fifth = [n for n, r in enumerate(records) if r["kind"] == "action_started"][4] + 1
+        ended_by_then = {r["path"] for r in records[:fifth] if r["kind"] == "action_ended"}
+        page.fill("#slider", str(fifth))
+        page.wait_for_selector(f"body[data-index='{fifth}']")
+        page.wait_for_selector("body[data-gantt-drawn='5']")
+        rows = _rows(page)
+        running = [r for r in rows if r["outcome"] == "running"]
+        expected_running = [r for r in started[:5] if r["path"] not in ended_by_then]
+        assert len(running) == len(expected_running) >= 1
+        assert page.locator("#gantt-chart line.gantt-now").count() == 1  # the moment shown
+        # Back to the start: no temporal step yet, the Gantt closes and its button hides.
+        page.fill("#slider", "0")
+        page.wait_for_selector("body[data-gantt-rows='0']")
+        assert page.is_hidden("#gantt-toggle") and page.is_hidden("#gantt-pane")
+    page.close()
+    assert errors == []
+
+
+def test_the_json_view_of_a_journal_carries_the_gantt_rows(journal: Path) -> None:
+    with serve(JournalSource(journal), quiet=True) as viewer:
+        import urllib.request
+
+        with urllib.request.urlopen(viewer.url.rstrip("/") + "/api/view") as response:
+            view = json.loads(response.read())
+    assert view["gantt"]["axis"] == "plan"
+    assert len(view["gantt"]["rows"]) == sum(
+        1 for r in read_journal(journal)[1] if r["kind"] == "action_started"
+    )
