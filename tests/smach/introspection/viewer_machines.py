@@ -144,11 +144,15 @@ class PickFailsOnce:
         from plan_bridge.execution.simulation import SimulatedWorld
 
         class World(SimulatedWorld):
-            failed = False
+            state = ("failed",)  # saved in checkpoints like the rest of the world
+
+            def __init__(self, task: Any) -> None:
+                super().__init__(task)
+                self.failed = False
 
             def perform(self, step: Any) -> Any:
-                if step.action == "pick" and not World.failed:
-                    World.failed = True
+                if step.action == "pick" and not self.failed:
+                    self.failed = True
                     with self._lock:
                         self.inject("action-failed", str(step), "the gripper slipped")
                         touched = self.model.ground(step).relevant_atoms(frozenset(self._facts))
