@@ -227,11 +227,22 @@ def _footprint(ground: GroundAction) -> tuple[set[Fact], set[Fact]]:
     return reads, writes
 
 
-def end_precedence(steps: Sequence[PlanStep], model: ActionModel) -> list[list[Edge]]:
+Footprint = tuple[set[Fact], set[Fact]]
+
+
+def footprints(steps: Sequence[PlanStep], model: ActionModel) -> list[Footprint]:
+    """The (read, written) atoms of each step, for :func:`precedence` and
+    :func:`end_precedence` (computing them is most of compiling a temporal plan)."""
+    return [_footprint(model.ground(step)) for step in steps]
+
+
+def end_precedence(
+    steps: Sequence[PlanStep], model: ActionModel, prints: Sequence[Footprint] | None = None
+) -> list[list[Edge]]:
     """For each step, the points its *end* waits for: the start and end points of the
     interfering steps planned before its end (a light held for an inspection is not
     switched off before the inspection ends, however quick the holding skill)."""
-    prints = [_footprint(model.ground(step)) for step in steps]
+    prints = footprints(steps, model) if prints is None else prints
     starts = [step.start or 0.0 for step in steps]
     ends = [(step.start or 0.0) + (step.duration or 0.0) for step in steps]
     waits: list[list[Edge]] = [[] for _ in steps]
@@ -247,9 +258,11 @@ def end_precedence(steps: Sequence[PlanStep], model: ActionModel) -> list[list[E
     return waits
 
 
-def precedence(steps: Sequence[PlanStep], model: ActionModel) -> list[list[Edge]]:
+def precedence(
+    steps: Sequence[PlanStep], model: ActionModel, prints: Sequence[Footprint] | None = None
+) -> list[list[Edge]]:
     """For each step, the edges its start waits for (see the module documentation)."""
-    prints = [_footprint(model.ground(step)) for step in steps]
+    prints = footprints(steps, model) if prints is None else prints
     starts = [step.start or 0.0 for step in steps]
     ends = [(step.start or 0.0) + (step.duration or 0.0) for step in steps]
     order = sorted(range(len(steps)), key=lambda i: (starts[i], i))
@@ -508,8 +521,9 @@ class TemporalDispatch(smach.Container):
         self.on_failure = on_failure
         origin = min((s.start or 0.0 for s in self.steps), default=0.0)
         self.planned_start = [(s.start or 0.0) - origin for s in self.steps]
-        self.waits = precedence(self.steps, model)
-        self.end_waits = end_precedence(self.steps, model)
+        prints = footprints(self.steps, model)
+        self.waits = precedence(self.steps, model, prints)
+        self.end_waits = end_precedence(self.steps, model, prints)
         self._states: dict[str, TimedStepState] = {}
         self._effects_lock = threading.Lock()
         self._order = list(labels)
