@@ -14,12 +14,12 @@ DOMAIN = DATA / "domain.pddl"
 PROBLEM = DATA / "problems" / "p01.pddl"
 
 
+FORMS = [[str(DATA)], [str(DATA), "--problem", "p01"], [str(DOMAIN), str(PROBLEM)]]
+FORM_IDS = ["folder", "folder-problem-name", "domain-problem"]
+
+
 @pytest.mark.timeout(120)
-@pytest.mark.parametrize(
-    "target",
-    [[str(DATA)], [str(DATA), "--problem", "p01"], [str(DOMAIN), str(PROBLEM)]],
-    ids=["folder", "folder-problem-name", "domain-problem"],
-)
+@pytest.mark.parametrize("target", FORMS, ids=FORM_IDS)
 def test_plan_takes_a_folder_or_a_domain_and_a_problem(
     target: list[str], capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -30,13 +30,17 @@ def test_plan_takes_a_folder_or_a_domain_and_a_problem(
 
 
 @pytest.mark.timeout(120)
-def test_check_and_run_take_a_domain_and_a_problem_file(
-    capsys: pytest.CaptureFixture[str],
+@pytest.mark.parametrize("target", FORMS, ids=FORM_IDS)
+def test_check_and_run_take_a_folder_or_a_domain_and_a_problem(
+    target: list[str], capsys: pytest.CaptureFixture[str]
 ) -> None:
-    assert main(["check", str(DOMAIN), str(PROBLEM)]) == 0
-    assert "OK (1 problem(s) checked)" in capsys.readouterr().out
-    assert main(["run", str(DOMAIN), str(PROBLEM), "--quiet", "--json"]) == 0
-    assert json.loads(capsys.readouterr().out)["goal_reached"] is True
+    assert main(["check", *target]) == 0
+    checked = capsys.readouterr().out
+    assert "p01.pddl: " in checked  # a folder without --problem: all its problems
+    assert f"OK ({1 + (target == [str(DATA)])} problem(s) checked)" in checked
+    assert main(["run", *target, "--quiet", "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["goal_reached"] is True and Path(report["problem"]).name == "p01.pddl"
 
 
 def test_two_different_problems_are_a_bad_input_error(
