@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import contextlib
 import threading
-from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from typing import Any, ClassVar, TypeVar
 
 import smach as _smach
@@ -74,9 +74,7 @@ class Container(ContainerEvents, State):
         self._bus = EventBus()
         self._path = "/ROOT"
         self._parent: Container | None = None
-        self._start_cbs: list[tuple[Callable[..., Any], tuple[Any, ...]]] = []
-        self._transition_cbs: list[tuple[Callable[..., Any], tuple[Any, ...]]] = []
-        self._termination_cbs: list[tuple[Callable[..., Any], tuple[Any, ...]]] = []
+        # (The SMACH callbacks: class-level empty tuples until one is registered.)
         self._local = ()
         self._log_info = False
         self._running = False

@@ -43,7 +43,7 @@ __all__ = ["ContainerEvents"]
 _monotonic = time.monotonic
 _current_thread = threading.current_thread
 
-_Callbacks = list[tuple[Callable[..., Any], tuple[Any, ...]]]
+_Callbacks = tuple[tuple[Callable[..., Any], tuple[Any, ...]], ...]
 
 
 class ContainerEvents:
@@ -55,9 +55,14 @@ class ContainerEvents:
     _bus: EventBus
     _path: str
     _userdata: UserData
-    _start_cbs: _Callbacks
-    _transition_cbs: _Callbacks
-    _termination_cbs: _Callbacks
+    # The SMACH callbacks, registered (rarely) on the instance. Empty class-level
+    # defaults keep a container's instance attributes at most 29: CPython (3.11+)
+    # stores up to 29 attributes shared-key and inline; a 30th turns every instance's
+    # attributes into its own dict, which costs a fresh machine's first run about
+    # twice the memory reads (see docs/performance.md, smach core).
+    _start_cbs: _Callbacks = ()
+    _transition_cbs: _Callbacks = ()
+    _termination_cbs: _Callbacks = ()
     # Listeners of this container's own events only (the SMACH callbacks).
     _local: tuple[Listener, ...]
     # Whether this run writes INFO log lines (see Container._begin).
@@ -85,21 +90,21 @@ class ContainerEvents:
 
     def register_start_cb(self, start_cb: Callable[..., Any], cb_args: Sequence[Any] = ()) -> None:
         """``start_cb(userdata, initial_states, *cb_args)`` at the start of each run."""
-        self._start_cbs.append((start_cb, tuple(cb_args)))
+        self._start_cbs = (*self._start_cbs, (start_cb, tuple(cb_args)))
         self._refresh_local()
 
     def register_transition_cb(
         self, transition_cb: Callable[..., Any], cb_args: Sequence[Any] = ()
     ) -> None:
         """``transition_cb(userdata, active_states, *cb_args)`` after each transition."""
-        self._transition_cbs.append((transition_cb, tuple(cb_args)))
+        self._transition_cbs = (*self._transition_cbs, (transition_cb, tuple(cb_args)))
         self._refresh_local()
 
     def register_termination_cb(
         self, termination_cb: Callable[..., Any], cb_args: Sequence[Any] = ()
     ) -> None:
         """``termination_cb(userdata, terminal_states, outcome, *cb_args)`` at the end."""
-        self._termination_cbs.append((termination_cb, tuple(cb_args)))
+        self._termination_cbs = (*self._termination_cbs, (termination_cb, tuple(cb_args)))
         self._refresh_local()
 
     def call_start_cbs(self) -> None:

@@ -46,9 +46,9 @@ class Iterator(Container):
         self._loop_outcomes: list[str] = []
         self._break_outcomes: list[str] = []
         self._final_outcome_map: dict[str, str] = {}
-        self._remapper_cache: Remapper | None = None
-        self._loops: frozenset[str] = frozenset()
-        self._breaks: frozenset[str] = frozenset()
+        # Compiled (see _compile): the state's remapper, the loop and break outcomes. One
+        # attribute: an instance keeps at most 29 (see Container, ``_start_cbs``).
+        self._tables: tuple[Remapper, frozenset[str], frozenset[str]] | None = None
         self._index = 0
 
     # -- construction ----------------------------------------------------------------------------
@@ -121,15 +121,18 @@ class Iterator(Container):
     def _compile(self) -> None:
         state, label = self._state, self._state_label
         assert state is not None and label is not None
-        self._remapper_cache = self._remapper(label, state, self._remapping)
-        self._loops = frozenset(self._loop_outcomes)
-        self._breaks = frozenset(self._break_outcomes)
+        self._tables = (
+            self._remapper(label, state, self._remapping),
+            frozenset(self._loop_outcomes),
+            frozenset(self._break_outcomes),
+        )
 
     # -- execution -------------------------------------------------------------------------------
     def _run(self) -> str | None:
         """Run the contained state once per item; return the (mapped) final outcome."""
-        state, label, remapper = self._state, self._state_label, self._remapper_cache
-        assert state is not None and label is not None and remapper is not None
+        state, label, tables = self._state, self._state_label, self._tables
+        assert state is not None and label is not None and tables is not None
+        remapper, loops, breaks = tables
         items = self._items() if callable(self._items) else self._items
         try:
             iterator = iter(items)
@@ -138,11 +141,13 @@ class Iterator(Container):
                 f"{self._path}: the items to iterate are not iterable: {items!r}"
             ) from exc
         outcome: str | None = self._exhausted_outcome
-        loops, breaks = self._loops, self._breaks
         data = self._userdata._data
         it_label = self._items_label
         bus = self._bus
         thread = self._thread
+        log = self._log_info  # (decided once per top-level run)
+        path = self._path
+        outcomes = state._outcomes
         self._index = 0
         preempted = False
         while True:
@@ -159,7 +164,17 @@ class Iterator(Container):
                     f"item {self._index}: {exc}"
                 ) from exc
             data[it_label] = item
-            outcome = self._step(label, state, remapper, thread)
+            if bus.listeners or self._local or self._preempt_requested:
+                outcome = self._step(label, state, remapper, thread)
+            else:  # nobody listens, no request to forward: _step inlined
+                if log:
+                    smach.loginfo(f"Iterating item {self._index} of {path}")
+                try:
+                    outcome = state.execute(remapper)
+                except Exception as exc:
+                    raise self._child_error(label, state, exc) from exc
+                if outcome not in outcomes:
+                    raise self._bad_outcome(label, state, outcome)
             self._index += 1
             if self._preempt_requested and not state._preempt_requested:
                 # The child serviced our request: stop here. (If it ignored the

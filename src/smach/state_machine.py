@@ -67,6 +67,9 @@ class StateMachine(Container):
 
     # Every target the table can return was checked to be an outcome of the machine.
     _outcome_checked = True
+    # The state last asked to preempt; set on the instance only by a preemption (an
+    # instance keeps at most 29 attributes: see Container, ``_start_cbs``).
+    _preempted_state: State | None = None
 
     def __init__(
         self,
@@ -80,16 +83,15 @@ class StateMachine(Container):
         self._remappings: dict[str, dict[str, str]] = {}
         self._constants: dict[str, dict[str, Any]] = {}
         self._initial_state_label: str | None = None
-        self._last_added_label: str | None = None
-        # Connector outcomes of the last add_auto() that the next add() links.
-        self._connector_outcomes: list[str] = []
+        # The last added label, and the connector outcomes of its add_auto() that the
+        # next add() links.
+        self._last_added: tuple[str, list[str]] | None = None
         self._current_slot: _Slot | None = None
-        self._preempted_state: State | None = None
         self._preempt_lock = threading.Lock()
         self._slots: dict[str, _Slot] | None = None
         self._first: _Slot  # the initial state's slot (set by _compile)
-        self._last_label = ""
-        self._last_outcome: str | None = None
+        # The last run's final state and its outcome (terminal states, the log line).
+        self._last_exit: tuple[str, str | None] = ("", None)
 
     # -- construction ------------------------------------------------------------------------
     @construction_method
@@ -154,18 +156,18 @@ class StateMachine(Container):
         self._adopt_child(label, state)
         table: dict[str, str | None] = dict.fromkeys(state._outcomes)
         table.update(given)
-        previous = self._last_added_label
-        if previous is not None:
-            for outcome in self._connector_outcomes:
+        if self._last_added is not None:
+            previous, connected = self._last_added
+            for outcome in connected:
                 self._transitions[previous][outcome] = label
         self._states[label] = state
         self._transitions[label] = table
         self._remappings[label] = dict(remapping) if remapping else {}
         self._constants[label] = dict(constants) if constants else {}
-        self._connector_outcomes = (
-            [o for o in connectors if given.get(o) is None] if connectors else []
+        self._last_added = (
+            label,
+            [o for o in connectors if given.get(o) is None] if connectors else [],
         )
-        self._last_added_label = label
         if self._initial_state_label is None:
             self._initial_state_label = label
         self._invalidate()
@@ -282,7 +284,8 @@ class StateMachine(Container):
         thread = self._thread
         log = self._log_info
         control: Controller | None = None
-        self._preempted_state = None
+        if self._preempted_state is not None:
+            self._preempted_state = None
         try:
             if smach.is_shutdown is not _never and smach.is_shutdown():
                 return None
@@ -368,8 +371,7 @@ class StateMachine(Container):
                 if observed:
                     self._emit_exited(label, outcome, thread)
                 break
-            self._last_label = label
-            self._last_outcome = outcome
+            self._last_exit = (label, outcome)
             if self._preempt_requested and not slot.state._preempt_requested:
                 self.service_preempt()
             # Not a slot, so a container outcome (a str).
@@ -386,7 +388,7 @@ class StateMachine(Container):
         return [self._initial_state_label]  # type: ignore[list-item]
 
     def _terminal_states(self) -> list[str]:
-        return [self._last_label]
+        return [self._last_exit[0]]
 
     def _release(self, held: tuple[Capture, ...]) -> None:
         """Send held captures (state_exited + transition [+ state_entered]) in one call."""
@@ -488,7 +490,6 @@ class StateMachine(Container):
         self._preempt_lock = threading.Lock()
         self._slots = None
         self._current_slot = None
-        self._preempted_state = None
 
     # -- introspection -----------------------------------------------------------------------------
     def get_children(self) -> dict[str, State]:
@@ -519,5 +520,5 @@ class StateMachine(Container):
 
     def _log_terminated(self, outcome: str | None) -> None:
         smach.loginfo(
-            f"State machine terminating '{self._last_label}':'{self._last_outcome}':'{outcome}'"
+            f"State machine terminating '{self._last_exit[0]}':'{self._last_exit[1]}':'{outcome}'"
         )
