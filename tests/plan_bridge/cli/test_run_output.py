@@ -4,13 +4,38 @@ the recovery from it."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
 
 from plan_bridge.cli import main
 
-FETCH = Path(__file__).parents[3] / "domains" / "fetch_drink"
+ROOT = Path(__file__).parents[3]
+FETCH = ROOT / "domains" / "fetch_drink"
+
+
+def readme_sample() -> list[str]:
+    """The main job's output as README.md shows it (the block after `./dev run`)."""
+    text = (ROOT / "README.md").read_text()
+    block = re.search(r"```\n(plan-bridge run: fetch_drink.*?)```", text, re.S)
+    assert block is not None, "README.md has no sample of the main job's output"
+    return block.group(1).splitlines()
+
+
+def pattern(sample: str) -> str:
+    """A sample line as a pattern: times may differ, `...` stands for anything."""
+    out = []
+    for part in re.split(r"(\.\.\.|\d+\.\d+ s|\[\d+ ms\])", sample):
+        if part == "...":
+            out.append(".*")
+        elif re.fullmatch(r"\d+\.\d+ s", part):
+            out.append(r"\d+\.\d+ s")
+        elif re.fullmatch(r"\[\d+ ms\]", part):
+            out.append(r"\[\d+ ms\]")
+        else:
+            out.append(re.escape(part))
+    return "".join(out)
 
 
 @pytest.mark.timeout(120)
@@ -39,3 +64,16 @@ def test_verbose_output_adds_the_states_each_step_enters(
     lines = capsys.readouterr().err.splitlines()
     states = [line for line in lines if line.startswith("    /ROOT/PLAN/")]
     assert states and all("/SKILL/" in line for line in states)
+
+
+@pytest.mark.timeout(120)
+def test_the_readme_shows_what_the_default_main_job_prints(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    assert main(["run", str(FETCH)]) == 0
+    lines = iter(capsys.readouterr().err.splitlines())
+    for sample in readme_sample():
+        if sample.strip() == "...":
+            continue
+        # Each sample line is printed, in this order (lines between them may be elided).
+        assert any(re.fullmatch(pattern(sample), line) for line in lines), sample
