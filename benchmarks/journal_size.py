@@ -27,7 +27,10 @@ import time
 from pathlib import Path
 from typing import Any
 
-DOMAINS = ("fetch_drink", "table_clearing", "recharge", "door_opening", "two_robot_delivery")
+
+def mission_folders(domains: Path) -> list[str]:
+    """Every mission in ``domains`` (each folder with a domain.pddl), by name."""
+    return sorted(d.name for d in domains.iterdir() if (d / "domain.pddl").is_file())
 
 
 def sizes(path: Path) -> dict[str, int]:
@@ -47,7 +50,7 @@ def sizes(path: Path) -> dict[str, int]:
 def missions(domains: Path, seeds: int, tmp: Path) -> None:
     print("1. shipped missions, fail rate 0.2")
     total_bytes = total_actions = total_structures = total_plans = 0
-    for domain in DOMAINS:
+    for domain in mission_folders(domains):
         for seed in range(seeds):
             journal = tmp / f"{domain}-{seed}.jsonl"
             result = subprocess.run(

@@ -25,7 +25,12 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-DOMAINS = ("fetch_drink", "table_clearing", "recharge", "door_opening", "two_robot_delivery")
+
+def mission_folders(domains: Path) -> list[str]:
+    """Every mission in ``domains`` (each folder with a domain.pddl), by name."""
+    return sorted(d.name for d in domains.iterdir() if (d / "domain.pddl").is_file())
+
+
 COMPARED = ("goal_reached", "executed", "faults_injected", "sim_time_s")
 
 
@@ -60,12 +65,13 @@ def main() -> None:
     parser.add_argument("--fail-rate", default="0.3")
     options = parser.parse_args()
     rng = random.Random(options.seed)
+    missions = mission_folders(Path(options.domains))
     same = 0
     different: list[str] = []
     with tempfile.TemporaryDirectory() as tmp:
         baselines: dict[tuple[str, int], tuple[dict[str, Any], bytes]] = {}
         for n in range(options.kills):
-            domain, mission_seed = rng.choice(DOMAINS), rng.randrange(4)
+            domain, mission_seed = rng.choice(missions), rng.randrange(4)
             key = (domain, mission_seed)
             if key not in baselines:
                 journal = Path(tmp) / f"{domain}-{mission_seed}.jsonl"
