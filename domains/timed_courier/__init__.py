@@ -7,6 +7,7 @@ numeric goal (``(>= (delivered) 1)``). The helper must hold the fire door open
 (``--planner auto``) and dispatched as a temporal plan; see README.md.
 """
 
+from .scripted import scripted
 from .skills import setup
 
-__all__ = ["setup"]
+__all__ = ["scripted", "setup"]

@@ -14,6 +14,7 @@ from plan_bridge.study.runs import (
     APPROACHES,
     DEFAULT_APPROACHES,
     RunSpec,
+    inapplicable,
     read_results,
     run_study,
 )
@@ -98,6 +99,7 @@ def _run_command(args: argparse.Namespace) -> int:
         seeds = [int(s) for s in args.seeds.split(",")] if args.seeds else list(range(args.runs))
     except ValueError:
         return fail(f"--seeds must be comma-separated integers, got {args.seeds!r}")
+    skipped: dict[str, list[str]] = {}
     try:
         for target in args.targets:
             loaded = load_target(target, args.problem or None)
@@ -105,12 +107,18 @@ def _run_command(args: argparse.Namespace) -> int:
                 return fail(
                     f"{target}: no scripted baseline (scripted() in the domain's Python); drop 'scripted' from --approaches"
                 )
+            for approach in approaches:
+                reason = inapplicable(approach, loaded.task)
+                if reason:
+                    skipped.setdefault(str(target), []).append(approach)
+                    print(f"plan-bridge study: {target}: {reason}; left out", file=sys.stderr)
     except PlanBridgeError as exc:
         return fail(str(exc))
     specs = [
         RunSpec(str(t), a, r, s, args.problem, args.variant)
         for t in args.targets
         for a in approaches
+        if a not in skipped.get(str(t), [])
         for r in args.fault_rates
         for s in seeds
     ]

@@ -35,6 +35,8 @@ PACKAGES = (
     "up-fast-downward",
     "up-pyperplan",
     "pyperplan",
+    "up-kairos",
+    "up-tamer",
     "matplotlib",
     "dask",
     "distributed",
@@ -43,6 +45,8 @@ PACKAGES = (
 PLANNER_PACKAGES = {
     "fast-downward": ("up-fast-downward",),
     "pyperplan": ("up-pyperplan", "pyperplan"),
+    "kairos": ("up-kairos",),
+    "tamer": ("up-tamer",),
 }
 
 

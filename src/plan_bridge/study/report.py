@@ -228,10 +228,11 @@ def _setup_section(
         + (f"{per_cell[0]}" if len(per_cell) == 1 else f"{per_cell[0]}-{per_cell[-1]}")
         + f"; seeds {_ranges(seeds)} (one run per seed in every cell, the same seeds for "
         "every approach, so every approach meets the same worlds and faults).",
-        f"- Fault rates: {', '.join(f'{r:g}' for r in rates)}. Approaches: "
+        f"- Fault rates: {', '.join(f'{r:g}' for r in rates)}. Approaches (policy, "
+        "planner; for `auto` the engines that found the plans): "
         + "; ".join(
             f"`{a}` ({APPROACHES[a][0] or 'hand-written machine'}"
-            + (f", {APPROACHES[a][1]}" if APPROACHES[a][1] else "")
+            + (f", {_planner_text(a, rows)}" if APPROACHES[a][1] else "")
             + ")"
             for a in approaches
         )
@@ -280,12 +281,28 @@ def _setup_section(
             "- Packages: " + ", ".join(f"{n} {v}" for n, v in sorted(packages.items())) + "."
         )
         planners = []
+        used = set().union(*(_engines(r) for r in rows))
         for planner, dists in PLANNER_PACKAGES.items():
+            if used and planner not in used:
+                continue
             found = [f"{d} {packages[d]}" for d in dists if d in packages]
             if found:
                 planners.append(f"{planner} ({', '.join(found)})")
         lines.append("- Planners: " + "; ".join(planners) + ".")
     return [*lines, ""]
+
+
+def _engines(row: dict[str, str]) -> set[str]:
+    """The engines that found a run's plans (the ``planner`` column, ``a+b``)."""
+    return {e for e in (row.get("planner") or "").split("+") if e}
+
+
+def _planner_text(approach: str, rows: list[dict[str, str]]) -> str:
+    planner = APPROACHES[approach][1]
+    if planner != "auto":
+        return planner
+    used = set().union(*(_engines(r) for r in rows if r["approach"] == approach))
+    return "auto: " + ", ".join(sorted(used)) if used else "auto"
 
 
 def write_report(

@@ -10,6 +10,10 @@ where it stopped, and a run is never written twice). A row depends only on its
 Approaches: ``scripted`` (the domain's hand-written baseline), ``planned`` (the
 executive with the full recovery policy), the ablations ``no-replan``,
 ``retry-only`` and ``replan-only``, and ``pyperplan`` (full policy, other planner).
+The planned approaches plan with ``auto``: Fast Downward on classical problems,
+Kairos (then TAMER) on temporal and numeric ones; the ``planner`` column names the
+engine that found the plans. Temporal missions play their timeline at
+:data:`TEMPORAL_TIME_SCALE` wall seconds per plan second.
 """
 
 from __future__ import annotations
@@ -32,6 +36,8 @@ __all__ = [
     "VARYING_FIELDS",
     "RunSpec",
     "failure_row",
+    "inapplicable",
+    "is_temporal",
     "pin_hash_seed",
     "read_results",
     "run_one",
@@ -41,13 +47,17 @@ __all__ = [
 APPROACHES: dict[str, tuple[str, str]] = {
     # name: (policy, planner); "scripted" has no planner.
     "scripted": ("", ""),
-    "planned": ("full", "fast-downward"),
-    "no-replan": ("no-replan", "fast-downward"),
-    "retry-only": ("retry-only", "fast-downward"),
-    "replan-only": ("replan-only", "fast-downward"),
+    "planned": ("full", "auto"),
+    "no-replan": ("no-replan", "auto"),
+    "retry-only": ("retry-only", "auto"),
+    "replan-only": ("replan-only", "auto"),
     "pyperplan": ("full", "pyperplan"),
 }
 DEFAULT_APPROACHES = tuple(APPROACHES)
+#: Wall seconds per plan second of a temporal mission's run. Its steps overlap and
+#: wait for each other's ends in real threads: at 0 (no waiting) which thread comes
+#: first decides what happens, and a run would not be a function of its seed.
+TEMPORAL_TIME_SCALE = 0.01
 
 FIELDS = [
     "target",
@@ -70,6 +80,7 @@ FIELDS = [
     "replans",
     "planner_calls",
     "planning_time_s",
+    "planner",
     "absorbed_skill",
     "absorbed_retry",
     "absorbed_continue",
@@ -88,6 +99,24 @@ VARYING_FIELDS = ("wall_time_s", "planning_time_s", "host", "worker")
 #: hash order (measured: pyperplan on fetch_drink picks another plan with another hash
 #: seed), so a run would otherwise depend on the process it ran in, not only its spec.
 HASH_SEED = "0"
+
+
+def inapplicable(approach: str, task: Any) -> str:
+    """Why ``approach`` cannot run ``task`` ('' when it can): an approach whose fixed
+    engine does not plan problems of the task's kind (pyperplan: classical only)."""
+    from plan_bridge.errors import PlanBridgeError
+    from plan_bridge.planning.engines import engines_for, problem_kind
+
+    planner = APPROACHES[approach][1]
+    if planner in ("", "auto"):
+        return ""
+    try:
+        usable = engines_for(task)
+    except PlanBridgeError:
+        usable = []
+    if planner in usable:
+        return ""
+    return f"approach {approach!r}: {planner} does not plan {problem_kind(task).name} problems"
 
 
 def pin_hash_seed() -> None:
@@ -198,12 +227,27 @@ def _count_steps(events: list[Any]) -> int:
     return sum(1 for e in events if e.kind == "state_exited")
 
 
+_temporal: dict[tuple[str, str], bool] = {}
+
+
+def is_temporal(path: str, problem: str) -> bool:
+    """Whether the target's problem has durative actions (it plays a timeline)."""
+    from plan_bridge.planning.engines import problem_kind
+
+    key = (path, problem)
+    if key not in _temporal:
+        _temporal[key] = problem_kind(target_of(path, problem).task).temporal
+    return _temporal[key]
+
+
 def _run(spec: RunSpec, clock: list[float]) -> dict[str, Any]:
     from plan_bridge.execution.executive import Executive, ReplanPolicy
+    from plan_bridge.execution.temporal import TimelineRecorder
     from plan_bridge.planning.planner import get_planner
 
     target = target_of(spec.target, spec.problem)
     task = target.task
+    temporal = is_temporal(spec.target, spec.problem)
     clock.append(time.monotonic())
     exits: list[Any] = []
 
@@ -219,14 +263,19 @@ def _run(spec: RunSpec, clock: list[float]) -> dict[str, Any]:
         machine = mission.machine
         if hasattr(machine, "add_listener"):
             machine.add_listener(count)
-        outcome = machine.execute()
         world = mission.world
+        if temporal:
+            world.time_scale = TEMPORAL_TIME_SCALE
+        began = time.monotonic()
+        outcome = machine.execute()
         faults = getattr(world, "faults_injected", 0)
         reached = bool(world.goal_reached())
         return {
             "outcome": outcome,
             "goal_reached": reached,
-            "sim_time_s": round(getattr(world, "sim_time", 0.0), 3),
+            "sim_time_s": round((time.monotonic() - began) / TEMPORAL_TIME_SCALE, 1)
+            if temporal
+            else round(getattr(world, "sim_time", 0.0), 3),
             "steps": _count_steps(exits),
             "actions_executed": getattr(world, "actions_run", ""),
             "faults_injected": faults,
@@ -245,16 +294,25 @@ def _run(spec: RunSpec, clock: list[float]) -> dict[str, Any]:
         concurrent=setup.concurrent,
     )
     executive.add_listener(count)
+    world = setup.world
+    timeline = TimelineRecorder()
+    if temporal and world is not None:
+        world.time_scale = executive.time_scale = TEMPORAL_TIME_SCALE
+        executive.add_listener(timeline)
     outcome = executive.execute()
     report = executive.report
-    world = setup.world
     faults = getattr(world, "faults_injected", 0)
+    sim_time = round(getattr(world, "sim_time", 0.0), 3)
+    if temporal:
+        # The executed makespan (first action's start to last one's end) in plan seconds.
+        makespan = timeline.makespan_executed
+        sim_time = round((makespan or 0.0) / TEMPORAL_TIME_SCALE, 1)
     decisions = [d["decision"] for d in report.decisions]
     failed = report.actions_failed
     return {
         "outcome": outcome,
         "goal_reached": bool(world.goal_reached()) if world is not None else report.goal_reached,
-        "sim_time_s": round(getattr(world, "sim_time", 0.0), 3),
+        "sim_time_s": sim_time,
         "steps": _count_steps(exits),
         "actions_executed": report.actions_executed,
         "actions_failed": failed,
@@ -265,6 +323,8 @@ def _run(spec: RunSpec, clock: list[float]) -> dict[str, Any]:
         "replans": report.replans,
         "planner_calls": report.planner_calls,
         "planning_time_s": round(report.planning_time_s, 4),
+        # The engine(s) that found this run's plans (``auto`` chooses per problem kind).
+        "planner": "+".join(sorted(report.planners_won)),
         # Faults that never surfaced as a failed step were absorbed inside the skills
         # (local retries, re-detections); the others by the executive's decisions.
         "absorbed_skill": max(0, faults - failed),
