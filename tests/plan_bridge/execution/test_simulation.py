@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import ast
 import copy
 import json
 import random
@@ -122,6 +123,87 @@ def test_a_shipped_world_has_no_attribute_outside_its_declarations(domain: str) 
 def test_a_test_world_has_no_attribute_outside_its_declarations() -> None:
     world = FaultyWorld(rooms(), seed=3, fail_rate=0.2)
     assert world.undeclared() == []
+
+
+def world_classes_in_source() -> list[tuple[Path, ast.ClassDef]]:
+    """Every class in domains/ and tests/ with a base named ``...World`` (worlds defined
+    inside functions too, which no import finds)."""
+    found = []
+    for folder in (DOMAINS, Path(__file__).parents[2]):
+        for path in sorted(folder.rglob("*.py")):
+            for node in ast.walk(ast.parse(path.read_text(), str(path))):
+                if isinstance(node, ast.ClassDef) and any(
+                    (base.id if isinstance(base, ast.Name) else getattr(base, "attr", "")).endswith(
+                        "World"
+                    )
+                    for base in node.bases
+                ):
+                    found.append((path, node))
+    return found
+
+
+def declared_in(node: ast.ClassDef) -> set[str]:
+    """The names a class body lists in its own state/constant/wiring tuples."""
+    names: set[str] = set()
+    for statement in node.body:
+        target = statement.target if isinstance(statement, ast.AnnAssign) else (
+            statement.targets[0] if isinstance(statement, ast.Assign) else None
+        )  # fmt: skip
+        value = getattr(statement, "value", None)
+        kind = target.id if isinstance(target, ast.Name) else ""
+        if kind in ("state", "constant", "wiring") and isinstance(value, ast.Tuple):
+            names.update(e.value for e in value.elts if isinstance(e, ast.Constant))
+    return names
+
+
+def writes_in(node: ast.ClassDef) -> tuple[set[str], list[str]]:
+    """Attributes the class's methods set on ``self``, and any they set on a class."""
+    on_self: set[str] = set()
+    on_class: list[str] = []
+    for sub in ast.walk(node):
+        targets: list[ast.expr] = []
+        if isinstance(sub, ast.Assign):
+            targets = list(sub.targets)
+        elif isinstance(sub, (ast.AugAssign, ast.AnnAssign)):
+            targets = [sub.target]
+        for target in targets:
+            if isinstance(target, ast.Attribute) and isinstance(target.value, ast.Name):
+                if target.value.id == "self":
+                    on_self.add(target.attr)
+                elif target.value.id in (node.name, "cls"):
+                    on_class.append(f"{target.value.id}.{target.attr}")
+            elif isinstance(target, ast.Attribute) and isinstance(target.value, ast.Call):
+                on_class.append(f"type(...).{target.attr}")
+    return on_self, on_class
+
+
+def test_every_world_in_the_domains_and_the_tests_declares_what_it_sets() -> None:
+    """A world class anywhere (shipped, or in a test, even inside a function) declares
+    each attribute its methods set, and keeps no state on a class (a snapshot would
+    miss it)."""
+    from plan_bridge.execution.timed_world import TimedWorld
+
+    classes = world_classes_in_source()
+    own = {node.name: declared_in(node) | {"state", "constant", "wiring"} for _, node in classes}
+    parents = {node.name: [getattr(b, "id", getattr(b, "attr", "")) for b in node.bases]
+               for _, node in classes}  # fmt: skip
+
+    def inherited(name: str) -> set[str]:
+        return own.get(name, set()).union(*(inherited(p) for p in parents.get(name, [])))
+
+    base = {*TimedWorld.declared("state"), *TimedWorld.declared("constant"),
+            *TimedWorld.declared("wiring")}  # fmt: skip
+    problems = []
+    for path, node in classes:
+        if node.name == "Forgetful":  # the test of the refusal below
+            continue
+        known = base | inherited(node.name)
+        on_self, on_class = writes_in(node)
+        problems += [f"{path.name}: {node.name}.{name} undeclared" for name in on_self - known]
+        problems += [f"{path.name}: {node.name} sets {name}" for name in on_class]
+    assert problems == []
+    names = {node.name for _, node in classes}
+    assert {"DoorWorld", "CourierWorld", "FaultyWorld", "World", "Forgetful"} <= names
 
 
 def test_snapshot_refuses_a_world_with_an_undeclared_attribute() -> None:
