@@ -320,13 +320,24 @@ class Executive(smach.Container):
             if not self._succeeded(i)
         ]
         done = [i for i in range(first, first + len(self._plan_in_force)) if self._succeeded(i)]
-        return {
+        snapshot = {
             "plan": remaining,
             "first_index": max(done, default=first - 1) + 1,
             "belief": sorted(format_fact(f) for f in self.belief.facts),
             "report": self.report.to_json(),
             "userdata": _json_values(self.userdata),
         }
+        # Temporal plans and numbers: the steps' planned times, the numeric fluents.
+        if any(step.start is not None for step in self._plan_in_force):
+            snapshot["timing"] = [
+                [step.start, step.duration]
+                for i, step in enumerate(self._plan_in_force, start=first)
+                if not self._succeeded(i)
+            ]
+        values = self.belief.values
+        if values:
+            snapshot["values"] = sorted([format_fact(f), v] for f, v in values.items())
+        return snapshot
 
     def resume_from(self, snapshot: dict[str, Any]) -> None:
         """Make the next :meth:`execute` continue from a :meth:`snapshot` (no initial plan)."""
@@ -336,7 +347,10 @@ class Executive(smach.Container):
         self._resume = dict(snapshot)
 
     def _restore(self, snapshot: dict[str, Any]) -> tuple[list[PlanStep], int]:
-        self.belief.replace(parse_fact(f) for f in snapshot["belief"])
+        values = {parse_fact(f): float(v) for f, v in snapshot.get("values", ())}
+        self.belief.replace(
+            (parse_fact(f) for f in snapshot["belief"]), values if "values" in snapshot else None
+        )
         saved = snapshot["report"]
         report = self.report
         for name in (
@@ -362,6 +376,12 @@ class Executive(smach.Container):
         for key, value in snapshot.get("userdata", {}).items():
             self.userdata[key] = value
         plan = [PlanStep(f[0], tuple(f[1:])) for f in (parse_fact(s) for s in snapshot["plan"])]
+        timing = snapshot.get("timing")
+        if isinstance(timing, list) and len(timing) == len(plan):
+            plan = [
+                PlanStep(step.action, step.arguments, start, duration)
+                for step, (start, duration) in zip(plan, timing, strict=True)
+            ]
         self._decide("resume", f"resuming with {len(plan)} steps left from a checkpoint")
         return plan, int(snapshot["first_index"])
 

@@ -99,6 +99,7 @@ MISSIONS = [
     ("recharge", 1, False),
     ("door_opening", 1, False),
     ("two_robot_delivery", 0, True),
+    ("timed_courier", 3, True),  # temporal and numeric: overlapping steps, planned times
 ]
 END = ("goal_reached", "executed", "faults_injected", "sim_time_s")
 
