@@ -20,7 +20,7 @@ from typing import Any
 from plan_bridge.study.comparison import compare_approaches, format_p
 from plan_bridge.study.environment import PLANNER_PACKAGES, read_sessions
 from plan_bridge.study.figures import draw_figures
-from plan_bridge.study.runs import APPROACHES, target_of
+from plan_bridge.study.runs import APPROACHES, TEMPORAL_TIME_SCALE, target_of
 from plan_bridge.study.statistics import median_ci, wilson
 
 __all__ = ["authoring_cost", "fault_model", "summarise_results", "wilson", "write_report"]
@@ -241,8 +241,9 @@ def _setup_section(
     if fault_models:
         lines += [
             "- Fault model: each fault is drawn from the run's seeded generator with "
-            "probability *scale x fault rate* (capped at 1) at the moment listed in the "
-            "domain's `world.py`:",
+            "probability *scale x fault rate* (capped at 1) at the moment the domain's "
+            "world (its `world.py`; for timed worlds `plan_bridge.execution.timed_world`) "
+            "says:",
             "",
             "  | mission | fault | scale |",
             "  |---|---|---:|",
@@ -292,6 +293,10 @@ def _setup_section(
     return [*lines, ""]
 
 
+#: Engines that plan temporal problems (a run that used one played a timeline).
+TEMPORAL_ENGINES = frozenset({"kairos", "tamer", "enhsp"})
+
+
 def _engines(row: dict[str, str]) -> set[str]:
     """The engines that found a run's plans (the ``planner`` column, ``a+b``)."""
     return {e for e in (row.get("planner") or "").split("+") if e}
@@ -332,7 +337,7 @@ def write_report(
     ]
     lines += _setup_section(rows, summary, out, fault_models or {})
     lines += ["## Findings", ""]
-    lines += _findings(summary, authoring)
+    lines += _findings(summary, authoring, rows)
     lines += [
         "",
         "## Success rate by fault rate",
@@ -407,7 +412,9 @@ def _comparison_section(comparisons: list[dict[str, Any]]) -> list[str]:
     return lines
 
 
-def _findings(summary: list[dict[str, Any]], authoring: list[dict[str, Any]]) -> list[str]:
+def _findings(
+    summary: list[dict[str, Any]], authoring: list[dict[str, Any]], rows: list[dict[str, str]]
+) -> list[str]:
     out: list[str] = []
     by = {(s["target"], s["variant"], s["approach"], s["fault_rate"]): s for s in summary}
     targets = sorted({(s["target"], s["variant"]) for s in summary})
@@ -430,11 +437,23 @@ def _findings(summary: list[dict[str, Any]], authoring: list[dict[str, Any]]) ->
         planned = by.get((target, variant, "planned", top))
         scripted = by.get((target, variant, "scripted", top))
         if planned and scripted:
+            timed = any(
+                _engines(r) & TEMPORAL_ENGINES
+                for r in rows
+                if r["target"] == target and r["variant"] == variant
+            )
             out.append(
                 f"  Median wall time of successful runs: planned "
                 f"{_seconds(planned['median_wall_time_s'], '.2f')} "
                 f"({planned['planning_share'] * 100:.0f}% of all planned runs' time is planning), "
-                f"scripted {_seconds(scripted['median_wall_time_s'], '.3f')}."
+                f"scripted {_seconds(scripted['median_wall_time_s'], '.3f')}"
+                + (
+                    f" (a temporal mission: both include playing the timeline at "
+                    f"{TEMPORAL_TIME_SCALE:g} wall s per plan second; its sim time is the "
+                    "executed makespan in plan seconds, measured on the wall clock)."
+                    if timed
+                    else "."
+                )
             )
     costs: dict[str, dict[str, dict[str, Any]]] = defaultdict(dict)
     for a in authoring:

@@ -67,6 +67,8 @@ def test_the_timed_courier_joins_the_study_with_its_script_and_kairos(tmp_path: 
     assert "`planned` (full, auto: kairos)" in report
     assert "Planners: kairos (up-kairos " in report
     assert "| timed_courier | drift | 1 |" in report
+    # Wall times of a temporal mission include playing its timeline: the report says so.
+    assert "a temporal mission: both include playing the timeline" in report
 
 
 def test_an_approach_whose_engine_cannot_plan_the_problem_kind_is_inapplicable() -> None:
