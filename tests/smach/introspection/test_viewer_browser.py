@@ -216,6 +216,8 @@ def test_big_graph_shows_every_state_and_collapses_containers(open_page: Any) ->
         assert sm.execute() == "done"
         page.wait_for_selector("#status:text-is('outcome: done')", timeout=10_000)
         assert page.locator("#graph .node.visited").count() >= 50
+        page.click("#fit")  # the whole machine in the window (docs/images/viewer-big-graph.png)
+        page.wait_for_timeout(200)
         shot(page, "big-graph")
         page.click("#graph [data-path='/ROOT/MISSION'] .toggle")
         page.wait_for_selector("#graph .node.collapsed[data-path='/ROOT/MISSION']")
