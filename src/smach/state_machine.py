@@ -88,8 +88,8 @@ class StateMachine(Container):
         self._last_added: tuple[str, list[str]] | None = None
         self._current_slot: _Slot | None = None
         self._preempt_lock = threading.Lock()
-        self._slots: dict[str, _Slot] | None = None
-        self._first: _Slot  # the initial state's slot (set by _compile)
+        # The compiled slots by label, and the initial state's slot (set by _compile).
+        self._slots: tuple[dict[str, _Slot], _Slot] | None = None
         # The last run's final state and its outcome (terminal states, the log line).
         self._last_exit: tuple[str, str | None] = ("", None)
 
@@ -263,14 +263,13 @@ class StateMachine(Container):
                     slot.next[outcome] = slots[target]
                 else:
                     slot.next[outcome] = target
-        self._slots = slots
         assert self._initial_state_label is not None  # (checked before compiling)
-        self._first = slots[self._initial_state_label]
+        self._slots = (slots, slots[self._initial_state_label])
 
     # -- execution -------------------------------------------------------------------------------
     def _run(self) -> str | None:
         """The transition loop: run the current state, follow its outcome's transition."""
-        slot = self._first
+        slot = self._slots[1]  # type: ignore[index]  # (compiled before every run)
         label = ""
         # With capture listeners only, the state_exited + transition of a step are held
         # until the next state is entered (nothing else happens in between in this
@@ -438,7 +437,9 @@ class StateMachine(Container):
 
     def _adopt(self, bus: EventBus, path: str) -> None:
         super()._adopt(bus, path)
-        for slot in (self._slots or {}).values():  # they hold the children's paths
+        for slot in (
+            self._slots[0].values() if self._slots else ()
+        ):  # they hold the children's paths
             slot.path = f"{path}/{slot.label}"
 
     def _missing_transition(self, slot: _Slot, outcome: object) -> InvalidUserCodeError:
@@ -481,7 +482,7 @@ class StateMachine(Container):
 
     def __getstate__(self) -> dict[str, Any]:
         state = super().__getstate__()
-        for name in ("_preempt_lock", "_slots", "_first", "_current_slot", "_preempted_state"):
+        for name in ("_preempt_lock", "_slots", "_current_slot", "_preempted_state"):
             state.pop(name, None)
         return state
 
