@@ -36,17 +36,32 @@ def _configure_view(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def _mission_given(path: str) -> str | None:
+    """What to say when ``path`` is a mission (folder or PDDL file), not a journal."""
+    from pathlib import Path
+
+    if Path(path).is_dir() or path.endswith(".pddl"):
+        return (
+            f"{path}: a mission, not a journal; view and export replay a journal written by "
+            f"'plan-bridge run TARGET --journal RUN.jsonl' (to watch a mission as it runs: "
+            f"'plan-bridge run TARGET --viewer')"
+        )
+    return None
+
+
 def _view(args: argparse.Namespace) -> int:
+    from plan_bridge.cli.base import fail
     from smach.introspection.cli import run_export, run_view
 
+    mission = _mission_given(args.journal)
+    if mission is not None:
+        return fail(mission)
     if args.check:
         return _check(args.journal)
     if args.export:
         args.format = args.export
         return run_export(args, prog="plan-bridge")
     if args.at is not None or args.event is not None or args.output:
-        from plan_bridge.cli.base import fail
-
         return fail("--at, --event and --output go with --export")
     return run_view(args, prog="plan-bridge")
 
@@ -74,8 +89,12 @@ def _configure_export(parser: argparse.ArgumentParser) -> None:
 
 
 def _export(args: argparse.Namespace) -> int:
+    from plan_bridge.cli.base import fail
     from smach.introspection.cli import run_export
 
+    mission = _mission_given(args.journal)
+    if mission is not None:
+        return fail(mission)
     return run_export(args, prog="plan-bridge")
 
 
