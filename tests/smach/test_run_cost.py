@@ -1,0 +1,99 @@
+"""What a run does not do: check a tree again, or build events nobody listens to."""
+
+from __future__ import annotations
+
+import pytest
+from smach_helpers import Leaf
+
+import smach
+from smach.container import Container
+
+
+def _nested(depth: int) -> list[smach.StateMachine]:
+    """``depth`` machines, each holding the next; the leaf at the bottom. Outermost first."""
+    inner: smach.State = Leaf(["done"])
+    levels = []
+    for _ in range(depth):
+        sm = smach.StateMachine(["done"])
+        with sm:
+            smach.StateMachine.add("CHILD", inner, {"done": "done"})
+        levels.append(sm)
+        inner = sm
+    return levels[::-1]
+
+
+def _count_checks(monkeypatch: pytest.MonkeyPatch) -> dict[int, int]:
+    checks: dict[int, int] = {}
+    original = smach.StateMachine.consistency_problems
+
+    def counting(self: smach.StateMachine) -> list[str]:
+        checks[id(self)] = checks.get(id(self), 0) + 1
+        return original(self)
+
+    monkeypatch.setattr(smach.StateMachine, "consistency_problems", counting)
+    return checks
+
+
+def test_a_nested_tree_is_checked_once_and_again_only_where_it_changed(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    levels = _nested(10)
+    checks = _count_checks(monkeypatch)
+    root = levels[0]
+    for _ in range(3):
+        assert root.execute() == "done"
+    # Closed before the counting began: checked and compiled at close(), never per run.
+    assert checks == {}
+    bottom = levels[-1]
+    with bottom:
+        smach.StateMachine.add("EXTRA", Leaf(["done"]))
+    assert root.execute() == "done"
+    assert root.execute() == "done"
+    # close() of the changed machine checked it once; the next run checked nothing.
+    assert checks == {id(bottom): 1}
+
+
+def test_a_machine_changed_after_close_is_checked_once_on_its_next_run_alone(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    outer, inner = _nested(2)
+    checks = _count_checks(monkeypatch)
+    outer.userdata = smach.UserData()  # a change made without close()
+    for _ in range(3):
+        assert outer.execute() == "done"
+    assert checks == {id(outer): 1}
+    assert inner.execute() == "done"
+    assert checks == {id(outer): 1}
+
+
+def test_loggers_without_listeners_write_lines_and_build_no_event(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    def no_event(*args: object, **kwargs: object) -> None:
+        raise AssertionError("an event was built with nobody listening")
+
+    for name in ("_emit_started", "_emit_entered", "_emit_exited", "_emit_transition"):
+        monkeypatch.setattr(Container, name, no_event)
+    monkeypatch.setattr(smach.StateMachine, "_emit_step", no_event)
+    sm = smach.StateMachine(["done"])
+    with sm:
+        smach.StateMachine.add("A", Leaf(["next"]), {"next": "B"})
+        smach.StateMachine.add("B", _nested(2)[0], {"done": "done"})
+    it = smach.Iterator(
+        outcomes=["done"],
+        input_keys=[],
+        output_keys=[],
+        it=[1, 2],
+        it_label="item",
+        exhausted_outcome="done",
+    )
+    with it:
+        smach.Iterator.set_contained_state("BODY", sm, loop_outcomes=["done"])
+    lines: list[str] = []
+    smach.set_loggers(lines.append, lines.append, lines.append, lines.append)
+    try:
+        assert it.execute() == "done"
+    finally:
+        smach.log.restore_default_loggers()
+    assert "State machine transitioning 'A':'next'-->'B'" in lines
+    assert sum(line.startswith("Iterating item") for line in lines) == 2
