@@ -82,6 +82,17 @@ def check_domain(domain: DomainModel, diags: Diagnostics, usage: Usage) -> None:
         for kind, table in (("predicate", domain.predicates), ("function", domain.functions)):
             if name in table:
                 _clash(source, diags, "constant", entry.offset, kind, table[name].offset, name)
+    offsets = (
+        ("predicate", {n: e.offset for n, e in domain.predicates.items()}),
+        ("function", {n: e.offset for n, e in domain.functions.items()}),
+        ("constant", {n: e.offset for n, e in domain.constants.items()}),
+    )
+    for action in domain.actions:  # UP 1.3: one namespace for actions and the others
+        for kind, declared in offsets:
+            if action.name in declared:
+                _clash(
+                    source, diags, "action", action.offset, kind, declared[action.name], action.name
+                )
     for action in domain.actions:
         ctx = _Context(
             domain,

@@ -14,7 +14,7 @@ from collections.abc import Iterable
 from typing import TYPE_CHECKING
 
 from plan_bridge.errors import PddlError
-from plan_bridge.pddl.features import classify
+from plan_bridge.pddl.features import classify, known, requirements_hint
 
 if TYPE_CHECKING:
     from plan_bridge.pddl.source import SourceText
@@ -93,15 +93,15 @@ def _check_requirements(source: SourceText, index: int) -> None:
                 f"({_KNOWN_UNSUPPORTED_REQUIREMENTS[flag.text]}): the unified-planning 1.3 "
                 "PDDL reader cannot read it",
                 flag.offset,
-                hint="supported requirements: " + " ".join(sorted(UP_REQUIREMENTS)),
+                hint=requirements_hint(),
                 feature=flag.text,
             )
         if flag.text not in UP_REQUIREMENTS and classify(flag.text) is None:
             raise source.error(
                 f"unknown PDDL requirement {flag.text!r}"
-                + did_you_mean(flag.text, UP_REQUIREMENTS),
+                + did_you_mean(flag.text, [s.name for s in known() if s.name[0] == ":"]),
                 flag.offset,
-                hint="allowed requirements: " + " ".join(sorted(UP_REQUIREMENTS)),
+                hint=requirements_hint(),
             )
         index += 1
 

@@ -30,6 +30,7 @@ __all__ = [
     "installed_engines",
     "is_installed",
     "known",
+    "requirements_hint",
 ]
 
 
@@ -117,7 +118,7 @@ _NONDET = (
 )
 _UP_READER = "the unified-planning 1.3 PDDL reader cannot read it"
 
-_TABLE = [
+_REQUIREMENTS = [
     _s(":strips", "add/delete effects", ("fast-downward", "pyperplan")),
     _s(":typing", "typed objects", ("fast-downward", "pyperplan")),
     _s(":negative-preconditions", "negated preconditions"),
@@ -154,7 +155,8 @@ _TABLE = [
     ),
     _u(":method-preconditions", "HTN method preconditions", "plan_bridge does not plan HTN"),
     _u(":multi-agent", "multi-agent planning", "plan_bridge plans for one agent"),
-    # Constructs (not requirement flags).
+]
+_CONSTRUCTS = [  # not requirement flags
     _u("either", "a union of types", _UP_READER),
     _u(":derived", "a derived predicate (axiom)", _UP_READER),
     _u(":observe", "a sensing action's observation", _CONTINGENT),
@@ -172,6 +174,7 @@ _TABLE = [
     _e("numeric", "numeric fluents and comparisons", _NUMERIC),
 ]
 
+_TABLE = _REQUIREMENTS + _CONSTRUCTS
 _BY_NAME = {support.name: support for support in _TABLE}
 
 #: Requirements that imply others (``:adl`` brings ``:negative-preconditions``...).
@@ -205,6 +208,19 @@ def classify(name: str) -> Support | None:
 def known() -> tuple[Support, ...]:
     """Every classified requirement and construct (for documentation and tests)."""
     return tuple(_TABLE)
+
+
+def requirements_hint() -> str:
+    """The requirement flags by how they are handled, for messages about requirements."""
+    groups = {
+        status: [s.name for s in _REQUIREMENTS if s.status == status]
+        for status in ("supported", "engine", "unsupported")
+    }
+    return (
+        f"supported requirements: {' '.join(groups['supported'])}; through a temporal or "
+        f"numeric engine: {' '.join(groups['engine'])}; known but not supported: "
+        f"{' '.join(groups['unsupported'])}"
+    )
 
 
 @cache

@@ -143,13 +143,21 @@ def _prepare_for_up(front: FrontEnd) -> None:
         for head, section in model.sections:
             if len(section.items) == 1 and head not in (":init", ":action", ":durative-action"):
                 edits.append(Edit(section.offset, section.end, ""))
-    # An object (or constant) named like a type: UP 1.3 keeps one namespace for both,
-    # so the type is renamed where it is used as a type (objects keep their names,
-    # since plans and skills use them).
-    names = set(problem.objects) | set(domain.constants)
-    taken = names | set(domain.types) | set(domain.predicates) | set(domain.functions)
+    # An object, constant, predicate, function or action named like a type: UP 1.3
+    # keeps one namespace for all of them, so the type is renamed where it is used as
+    # a type (the others keep their names, since plans and skills use them).
+    others: dict[str, str] = {}
+    for action in domain.actions:
+        others.setdefault(action.name, "an action")
+    for name in domain.functions:
+        others[name] = "a function"
+    for name in domain.predicates:
+        others[name] = "a predicate"
+    for name in [*domain.constants, *problem.objects]:
+        others[name] = "an object"
+    taken = set(others) | set(domain.types)
     renames: dict[str, str] = {}
-    for clash in sorted(names & set(domain.types)):
+    for clash in sorted(set(others) & set(domain.types)):
         new = f"{clash}_type"
         while new in taken:
             new += "_"
@@ -158,8 +166,8 @@ def _prepare_for_up(front: FrontEnd) -> None:
         front.diagnostics.warning(
             domain.source,
             entry.offset,
-            f"type {clash!r} has the name of an object; unified-planning 1.3 needs distinct "
-            f"names, so plan_bridge reads this type as {new!r}",
+            f"type {clash!r} has the name of {others[clash]}; unified-planning 1.3 needs "
+            f"distinct names, so plan_bridge reads this type as {new!r}",
         )
     if renames:
         domain_edits += _type_renames(domain.tree, renames, domain.sections)

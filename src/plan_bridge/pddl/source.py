@@ -248,7 +248,8 @@ def read_source(path: str | Path, kind: str, *, max_bytes: int = DEFAULT_MAX_BYT
         raise PddlError(
             f"{kind} file is {size / 1e6:.1f} MB, larger than the {max_bytes / 1e6:.1f} MB limit",
             path=shown,
-            hint="raise the limit with max_bytes=... if this file is really meant to be loaded",
+            hint="the limit guards against runaway or wrong files (a robot's PDDL is rarely over "
+            "1 MB); from Python, load_task(..., max_bytes=N) reads a larger file",
         )
     try:
         data = file.read_bytes()

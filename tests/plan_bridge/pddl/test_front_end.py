@@ -111,6 +111,17 @@ def test_contingent_and_probabilistic_constructs_are_named_not_called_typos() ->
     assert "probabilistic" in features.classify("probabilistic").describe()  # type: ignore[union-attr]
 
 
+def test_a_requirement_refusal_lists_unsupported_flags_apart_from_supported_ones() -> None:
+    text = DOMAIN.replace(":negative-preconditions)", ":negative-preconditions :contingnet)")
+    with pytest.raises(PddlError) as caught:
+        _source(text, "domain")
+    supported, _, rest = caught.value.hint.partition("; through")
+    assert ":contingent" not in supported and ":strips" in supported
+    assert ":durative-actions" in rest.split("known but not supported")[0]
+    assert ":contingent" in rest.split("known but not supported")[1]
+    assert "did you mean :contingent?" in caught.value.explanation
+
+
 def test_engines_of_the_classification_name_their_packages() -> None:
     for support in features.known():
         for engine in support.engines:

@@ -1,0 +1,14 @@
+(define (problem deliver-one)
+  (:domain courier)
+  (:objects
+    van - robot
+    depot shop - place
+    box - parcel)
+  (:init
+    (at van depot)
+    (lies box depot)
+    (empty van)
+    (= (fuel van) 5)
+    (link depot shop)
+    (link shop depot))
+  (:goal (and (lies box shop))))
