@@ -114,6 +114,18 @@ class Timeline:
         )
         self.actions = [*self.actions[-(MAX_ACTIONS - 1) :], action]
 
+    def close(self, path: str, t: float | None, outcome: str, *, below: bool = False) -> None:
+        """End the running rows of ``path`` (and of the states below it with ``below``)
+        at ``t`` (None: the last moment the timeline saw): the step's own end event was
+        not seen (a live viewer that dropped events, or a run killed while the step ran,
+        whose root starts again in the resumed run)."""
+        if t is None:
+            t = max((r.ended or r.started for r in self.actions), default=0.0)
+        prefix = path.rstrip("/") + "/"
+        for n, row in enumerate(self.actions):
+            if row.ended is None and (row.path == path or (below and row.path.startswith(prefix))):
+                self.actions[n] = replace(row, ended=max(t, row.started), outcome=outcome)
+
     def ended(self, path: str, record: Mapping[str, Any]) -> None:
         t = _number(record.get("time"))
         outcome = str(record.get("outcome", ""))

@@ -95,6 +95,7 @@ class ViewModel:
             # The root starts again (a resumed run): nothing of the run before is active,
             # even the states a killed process never saw end.
             self.active.clear()
+            self.timeline.close(path, None, "interrupted", below=True)
         self.active[path] = None
         self.error_paths.pop(path, None)
         self.timeline.container_started(path)
@@ -126,6 +127,8 @@ class ViewModel:
     def _terminated(self, path: str, record: Mapping[str, Any]) -> None:
         self._deactivate(path)
         outcome = record.get("outcome")
+        if self.time is not None and self.timeline.actions:
+            self.timeline.close(path, self.time, str(outcome))
         if outcome is not None:
             self.outcomes[path] = str(outcome)
         if self._is_root(path) or not self.active:

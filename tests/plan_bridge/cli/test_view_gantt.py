@@ -4,8 +4,15 @@ artifacts/viewer/ (gitignored)."""
 
 from __future__ import annotations
 
+import importlib.util
 import json
+import os
 import shutil
+import signal
+import subprocess
+import sys
+import threading
+import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -22,6 +29,7 @@ pytestmark = pytest.mark.browser
 REPO = Path(__file__).parents[3]
 DOMAINS = REPO / "domains"
 ARTIFACTS = REPO / "artifacts" / "viewer"
+TOOL = REPO / "tools" / "gantt_screenshot.py"
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
 ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking"]
 
@@ -147,3 +155,87 @@ def test_the_json_view_of_a_journal_carries_the_gantt_rows(journal: Path) -> Non
     assert len(view["gantt"]["rows"]) == sum(
         1 for r in read_journal(journal)[1] if r["kind"] == "action_started"
     )
+
+
+@pytest.mark.timeout(180)
+def test_the_live_page_grows_the_running_bars_while_a_temporal_mission_runs(
+    browser: Any, tmp_path: Path
+) -> None:
+    journal = tmp_path / "live.jsonl"
+    env = {**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST", "PYTHONUNBUFFERED": "1"}
+    process = subprocess.Popen(
+        [sys.executable, "-m", "plan_bridge", "run", str(DOMAINS / "timed_courier"),
+         "--seed", "3", "--fail-rate", "0.3", "--time-scale", "0.05", "--viewer",
+         "--journal", str(journal)],
+        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, env=env,
+    )  # fmt: skip
+    lines: list[str] = []
+    reader = threading.Thread(
+        target=lambda: lines.extend(line.rstrip("\n") for line in process.stderr or ()),
+        daemon=True,
+    )
+    reader.start()
+    page = browser.new_page(viewport={"width": 1400, "height": 900})
+    errors: list[str] = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    try:
+        deadline = time.monotonic() + 60
+        while not any(line.startswith("smach viewer: ") for line in lines):
+            assert time.monotonic() < deadline and process.poll() is None, "\n".join(lines)
+            time.sleep(0.05)
+        url = next(line for line in lines if line.startswith("smach viewer: ")).split(": ", 1)[1]
+        page.goto(url.strip())
+        page.wait_for_selector("body[data-ready='1']", timeout=20_000)
+        page.wait_for_selector("#gantt-toggle:not([hidden])", timeout=60_000)
+        page.click("#gantt-toggle")
+        # While the mission runs: bars of running actions, drawn again as they grow.
+        running_widths: dict[int, list[float]] = {}
+        while not any(line.startswith("viewer: ") for line in lines):
+            for row in _rows(page):
+                if row["outcome"] == "running":
+                    running_widths.setdefault(row["index"], []).append(row["actual"])
+            assert process.poll() is None, "\n".join(lines)
+            time.sleep(0.05)
+        assert any(len(set(w)) > 1 for w in running_widths.values()), running_widths
+        # Once it ended: one finished bar per started action of its journal.
+        _, records = read_journal(journal)
+        started = sum(1 for r in records if r["kind"] == "action_started")
+        deadline = time.monotonic() + 20  # the viewer's pump folds the last events
+        rows = _rows(page)
+        while time.monotonic() < deadline and (
+            len(rows) != started or any(r["outcome"] == "running" for r in rows)
+        ):
+            time.sleep(0.1)
+            rows = _rows(page)
+        assert len(rows) == started
+        assert all(r["outcome"] != "running" for r in rows)
+    finally:
+        page.close()
+        if process.poll() is None:
+            process.send_signal(signal.SIGINT)
+        try:
+            process.wait(timeout=30)
+        finally:
+            if process.poll() is None:
+                process.kill()
+                process.wait(timeout=10)
+            reader.join(timeout=10)
+            if process.stderr is not None:
+                process.stderr.close()
+    assert errors == []
+    assert process.returncode == 0
+
+
+@pytest.mark.timeout(120)
+def test_the_docs_screenshot_tool_draws_the_gantt_of_a_journal(
+    browser: Any, journal: Path, tmp_path: Path
+) -> None:
+    spec = importlib.util.spec_from_file_location("gantt_screenshot", TOOL)
+    assert spec is not None and spec.loader is not None
+    tool = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(tool)
+    out = tmp_path / "gantt.png"
+    rows = tool.take(out, journal, browser=browser)
+    started = sum(1 for r in read_journal(journal)[1] if r["kind"] == "action_started")
+    assert rows == started
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

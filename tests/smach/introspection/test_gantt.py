@@ -143,3 +143,35 @@ def test_the_timeline_keeps_a_bounded_number_of_rows() -> None:
     view = gantt(timeline, None)
     assert view is not None and len(view["rows"]) == MAX_ACTIONS
     assert view["rows"][0]["index"] == 10
+
+
+def test_a_step_whose_end_event_is_missing_ends_with_its_state() -> None:
+    records = [
+        _dispatch(0.0),
+        _start(0.0, "01_A", 1, 0.0, 1.0),
+        {"kind": "container_terminated", "path": f"{PLAN}/01_A", "time": 0.3, "outcome": "aborted"},
+    ]
+    (row,) = fold({}, records).to_json()["gantt"]["rows"]
+    assert (row["outcome"], row["running"], row["a1"]) == ("aborted", False, pytest.approx(3.0))
+
+
+def test_steps_running_when_a_run_was_killed_end_as_interrupted_when_it_resumes() -> None:
+    records = [
+        {"kind": "container_started", "path": "/ROOT", "time": 0.0},
+        _dispatch(0.0),
+        _start(0.0, "01_A", 1, 0.0, 5.0),
+        _start(0.0, "02_B", 2, 0.0, 1.0),
+        _end(0.1, "02_B"),
+        {"kind": "resumed"},
+        {"kind": "container_started", "path": "/ROOT", "time": 50.0},
+        _dispatch(50.0),
+        _start(50.0, "03_A", 3, 0.0, 5.0),
+    ]
+    structure = {"path": "/ROOT", "label": "ROOT", "children": []}
+    rows = fold({"structure": structure}, records).to_json()["gantt"]["rows"]
+    assert [(r["index"], r["outcome"]) for r in rows] == [
+        (1, "interrupted"),
+        (2, "succeeded"),
+        (3, "running"),
+    ]
+    assert rows[0]["a1"] == pytest.approx(1.0)  # ends when the killed run was last seen

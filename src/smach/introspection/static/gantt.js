@@ -54,7 +54,8 @@
       '<span><i class="gsw succeeded"></i>succeeded</span>' +
       '<span><i class="gsw running"></i>running</span>' +
       '<span><i class="gsw aborted"></i>aborted / invalid</span>' +
-      '<span><i class="gsw preempted"></i>preempted</span></div>' +
+      '<span><i class="gsw preempted"></i>preempted</span>' +
+      '<span><i class="gsw interrupted"></i>interrupted (run killed, then resumed)</span></div>' +
       '<svg id="gantt-axis"></svg></div><div id="gantt-scroll"><svg id="gantt-chart"></svg></div>';
     document.getElementById("graph-pane").appendChild(pane);
     const button = document.createElement("button");
@@ -158,12 +159,6 @@
     let lastDispatch = null;
     rows.forEach((r, i) => {
       const y = i * ROW + 4;
-      if (lastDispatch !== null && r.dispatch !== lastDispatch) {
-        el("line", { x1: 0, x2: width, y1: y - 2, y2: y - 2, class: "gantt-dispatch" }, chart);
-        el("text", { x: width - 6, y: y + 9, class: "gantt-plan", "text-anchor": "end" }, chart).textContent =
-          `plan #${r.plan}, dispatch ${r.dispatch + 1}`;
-      }
-      lastDispatch = r.dispatch;
       const g = el("g", {
         class: `gantt-row o-${r.outcome}`,
         "data-index": r.index,
@@ -171,6 +166,9 @@
         "data-dispatch": r.dispatch,
       }, chart);
       if (i % 2) el("rect", { x: 0, y: y - 2, width, height: ROW, class: "gantt-stripe" }, g);
+      const boundary = lastDispatch !== null && r.dispatch !== lastDispatch;
+      if (boundary) el("line", { x1: 0, x2: width, y1: y - 2, y2: y - 2, class: "gantt-dispatch" }, g);
+      lastDispatch = r.dispatch;
       const label = el("text", { x: 6, y: y + 13, class: "gantt-label" }, g);
       const text = `${r.index}. ${r.action}`;
       label.textContent = text.length > 42 ? `${text.slice(0, 41)}…` : text;
@@ -182,6 +180,11 @@
       const actual = el("rect", {
         x: a0, y: y + 5, width: Math.max(2, AX(r.a1) - a0), height: ROW - 14, rx: 2, class: `gantt-actual o-${r.outcome}`,
       }, g);
+      if (boundary) {
+        // Over the bars: which plan this block of rows runs.
+        el("text", { x: width - 6, y: y + 9, class: "gantt-plan", "text-anchor": "end" }, g).textContent =
+          `plan #${r.plan}, dispatch ${r.dispatch + 1}`;
+      }
       const unit = wallAxis ? "wall s" : "plan s";
       const tip =
         `${r.index}. ${r.action} (plan #${r.plan}) — ${r.outcome}\n` +
