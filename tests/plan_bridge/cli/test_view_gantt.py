@@ -5,6 +5,7 @@ artifacts/viewer/ (gitignored)."""
 from __future__ import annotations
 
 import importlib.util
+import itertools
 import json
 import os
 import shutil
@@ -239,3 +240,67 @@ def test_the_docs_screenshot_tool_draws_the_gantt_of_a_journal(
     started = sum(1 for r in read_journal(journal)[1] if r["kind"] == "action_started")
     assert rows == started
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def _long_journal(path: Path, actions: int) -> None:
+    """A journal of one temporal plan of ``actions`` actions in three overlapping lanes
+    (records as the dispatcher writes them), at time scale 0.01."""
+    tree = {"path": "/ROOT", "label": "ROOT", "type": "Executive", "outcomes": ["succeeded"],
+            "input_keys": [], "output_keys": [], "is_container": True, "children": [],
+            "edges": [], "initial_states": []}  # fmt: skip
+    lines = [{"kind": "header", "format": "smach-journal/1", "structure": tree}]
+    lines.append({"kind": "container_started", "path": "/ROOT", "time": 10.0})
+    lines.append({"kind": "container_started", "path": "/ROOT/PLAN", "time": 10.0})
+    for i in range(actions):
+        start, duration = (i // 3) * 2.0, 3.0 + i % 3
+        label = f"{i + 1:03d}_MOVE_ROBOT{i % 3}_WAYPOINT_WITH_A_LONG_NAME_{i}"
+        common = {"path": f"/ROOT/PLAN/{label}", "index": i + 1,
+                  "action": f"(move robot{i % 3} waypoint-with-a-long-name-{i} next-{i})",
+                  "planned_start": start, "planned_duration": duration}  # fmt: skip
+        t0, t1 = 10.0 + start * 0.01, 10.0 + (start + duration * 1.2) * 0.01
+        lines.append({"kind": "action_started", "time": t0, "actual_start": t0 - 10.0,
+                      "time_scale": 0.01, **common})  # fmt: skip
+        lines.append({"kind": "action_ended", "time": t1, "actual_start": t0 - 10.0,
+                      "actual_end": t1 - 10.0, "outcome": "succeeded", **common})  # fmt: skip
+    path.write_text("".join(json.dumps(line) + "\n" for line in lines))
+
+
+@pytest.mark.timeout(120)
+def test_a_plan_of_150_actions_scrolls_under_a_fixed_axis_with_readable_labels(
+    browser: Any, tmp_path: Path
+) -> None:
+    journal = tmp_path / "long.jsonl"
+    _long_journal(journal, 150)
+    page = browser.new_page(viewport={"width": 1400, "height": 900})
+    errors: list[str] = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    with serve(JournalSource(journal), quiet=True) as viewer:
+        page.goto(viewer.url)
+        page.wait_for_selector("body[data-ready='1']", timeout=10_000)
+        page.click("#gantt-toggle")
+        page.wait_for_selector("body[data-gantt-drawn='150']")
+        scroll = page.eval_on_selector("#gantt-scroll", "e => [e.scrollHeight, e.clientHeight]")
+        assert scroll[0] > scroll[1] * 3  # the rows scroll
+        axis_before = page.locator("#gantt-axis").bounding_box()
+        labels = page.eval_on_selector_all(
+            "#gantt-chart text.gantt-label",
+            "els => els.map(e => { const b = e.getBBox(); return [b.x, b.y, b.width, b.height]; })",
+        )
+        assert len(labels) == 150
+        for (_, y, _, h), (_, y2, _, _) in itertools.pairwise(labels):
+            assert y + h <= y2 + 0.5  # rows do not overlap
+        label_column = page.eval_on_selector(
+            "#gantt-chart rect.gantt-planned", "e => Number(e.getAttribute('x'))"
+        )
+        assert all(x + w <= label_column for x, _, w, _ in labels)  # labels clear of bars
+        page.eval_on_selector("#gantt-scroll", "e => { e.scrollTop = e.scrollHeight; }")
+        last = page.locator("#gantt-chart g.gantt-row[data-index='150']")
+        assert last.is_visible()
+        box, pane = last.bounding_box(), page.locator("#gantt-scroll").bounding_box()
+        assert box is not None and pane is not None
+        assert pane["y"] <= box["y"] and box["y"] + box["height"] <= pane["y"] + pane["height"] + 1
+        assert page.locator("#gantt-axis").bounding_box() == axis_before  # the axis stays
+        ARTIFACTS.mkdir(parents=True, exist_ok=True)
+        page.screenshot(path=str(ARTIFACTS / "gantt-150.png"))
+    page.close()
+    assert errors == []

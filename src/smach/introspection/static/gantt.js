@@ -43,6 +43,26 @@
     return t.toFixed(1).replace(/\.0$/, "");
   }
 
+  // The label, cut (with "…") to fit `room` pixels of the label column.
+  const fitted = new Map(); // text -> what fits (measuring forces a layout: once per text)
+  function fitLabel(node, text, room) {
+    const known = fitted.get(text);
+    if (known !== undefined) {
+      node.textContent = known;
+      return;
+    }
+    node.textContent = text;
+    let width = node.getComputedTextLength();
+    let keep = text.length;
+    while (width > room && keep > 4) {
+      keep = Math.min(keep - 1, Math.floor((keep * room) / width) - 1);
+      node.textContent = `${text.slice(0, keep)}…`;
+      width = node.getComputedTextLength();
+    }
+    if (fitted.size > 20000) fitted.clear();
+    fitted.set(text, node.textContent);
+  }
+
   function setup() {
     const bar = document.getElementById("bar");
     const pane = document.createElement("section");
@@ -170,8 +190,7 @@
       if (boundary) el("line", { x1: 0, x2: width, y1: y - 2, y2: y - 2, class: "gantt-dispatch" }, g);
       lastDispatch = r.dispatch;
       const label = el("text", { x: 6, y: y + 13, class: "gantt-label" }, g);
-      const text = `${r.index}. ${r.action}`;
-      label.textContent = text.length > 42 ? `${text.slice(0, 41)}…` : text;
+      fitLabel(label, `${r.index}. ${r.action}`, LABEL - 12);
       const p0 = X(r.p0);
       const planned = el("rect", {
         x: p0, y: y + 1, width: Math.max(1, X(r.p1) - p0), height: ROW - 6, rx: 2, class: "gantt-planned",
