@@ -69,12 +69,14 @@ def cpu_model() -> str:
     return platform.processor() or platform.machine() or "unknown"
 
 
-def source_revision() -> str:
-    """The git commit of the plan_bridge source in use, ``+dirty`` if it has local edits.
+def source_revision(folder: Path | None = None) -> str:
+    """The git commit of the plan_bridge source in use, ``+dirty`` if the code has
+    local edits (tracked files under ``src/`` or ``domains/``: a study rewriting its
+    own report in the checkout does not count).
 
     Empty when plan_bridge is not run from a git checkout (an installed wheel).
     """
-    folder = Path(__file__).resolve().parent
+    folder = folder or Path(__file__).resolve().parent
     try:
         head = subprocess.run(
             ["git", "-C", str(folder), "rev-parse", "HEAD"],
@@ -84,7 +86,10 @@ def source_revision() -> str:
             check=True,
         ).stdout.strip()
         dirty = subprocess.run(
-            ["git", "-C", str(folder), "status", "--porcelain", "--untracked-files=no"],
+            [
+                *("git", "-C", str(folder), "status", "--porcelain", "--untracked-files=no"),
+                *("--", ":/src", ":/domains"),
+            ],
             capture_output=True,
             text=True,
             timeout=10,

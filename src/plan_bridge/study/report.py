@@ -273,7 +273,7 @@ def _setup_section(
                 + ")"
                 for s in sessions
             )
-            + ". A source marked +dirty had uncommitted edits."
+            + ". A source marked +dirty had uncommitted edits in src/ or domains/."
         )
     for (host, cpu, count), systems in sorted(machines.items()):
         lines.append(f"- Machine `{host}`: {cpu}, {count} CPUs; {'; '.join(sorted(systems))}.")

@@ -110,3 +110,24 @@ def test_the_scripted_courier_holds_the_fire_door_while_it_passes() -> None:
     # Both parcels delivered, box1 through the fire door (hold-door with pass-door).
     assert mission.world.values["(delivered)"] == 2
     assert {f.kind for f in mission.world.faults} == set()
+
+
+def test_a_source_is_dirty_only_for_edits_of_code_not_of_reports(tmp_path: Path) -> None:
+    from plan_bridge.study.environment import source_revision
+
+    def git(*args: str) -> None:
+        subprocess.run(["git", "-C", str(tmp_path), *args], check=True, capture_output=True)
+
+    (tmp_path / "src").mkdir()
+    (tmp_path / "docs").mkdir()
+    (tmp_path / "src" / "code.py").write_text("x = 1\n")
+    (tmp_path / "docs" / "report.md").write_text("old\n")
+    git("init", "-q")
+    git("add", ".")
+    git("-c", "user.name=t", "-c", "user.email=t@t", "commit", "-q", "-m", "one")
+    clean = source_revision(tmp_path / "src")
+    assert len(clean) == 40 and "+" not in clean
+    (tmp_path / "docs" / "report.md").write_text("a study rewrote its report\n")
+    assert source_revision(tmp_path / "src") == clean
+    (tmp_path / "src" / "code.py").write_text("x = 2\n")
+    assert source_revision(tmp_path / "src") == clean + "+dirty"
