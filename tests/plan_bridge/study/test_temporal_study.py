@@ -131,3 +131,15 @@ def test_a_source_is_dirty_only_for_edits_of_code_not_of_reports(tmp_path: Path)
     assert source_revision(tmp_path / "src") == clean
     (tmp_path / "src" / "code.py").write_text("x = 2\n")
     assert source_revision(tmp_path / "src") == clean + "+dirty"
+
+
+def test_the_scripted_courier_refuses_a_door_no_helper_can_hold(tmp_path: Path) -> None:
+    problem = (COURIER / "problems" / "p01.pddl").read_text()
+    moved = problem.replace("(at helper hall)", "(at helper depot)")
+    assert moved != problem
+    (tmp_path / "p.pddl").write_text(moved)
+    task = load_task(COURIER / "domain.pddl", tmp_path / "p.pddl")
+    with pytest.raises(
+        ValueError, match=r"helper \(depot\) stands at neither side of the fire door hall-lab"
+    ):
+        courier_module().scripted(task, seed=0, fail_rate=0.0)  # type: ignore[attr-defined]
