@@ -314,8 +314,18 @@ class ViewModel:
             "decisions": self.decisions,
             "steps": self.steps,
             "running_step": self.running_step,
-            "gantt": gantt(self.timeline, self.time),
+            "gantt": self._gantt_summary(),
         }
+
+    def _gantt_summary(self) -> dict[str, int] | None:
+        actions = self.timeline.actions
+        if not actions:
+            return None
+        return {"rows": len(actions), "running": sum(1 for a in actions if a.ended is None)}
+
+    def gantt_json(self) -> dict[str, Any] | None:
+        """The Gantt view's rows at this moment (sent on their own: ``/api/gantt``)."""
+        return gantt(self.timeline, self.time)
 
 
 _HANDLERS = {

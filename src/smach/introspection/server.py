@@ -150,6 +150,13 @@ class ViewerServer:
                 return text
             return self._dump_view(self.history.view_at(at))
 
+    def gantt_json(self, at: int | None = None) -> str:
+        """The Gantt rows of the view after ``at`` records (the newest by default)."""
+        with self._cond:
+            model = self.history.model if at is None or at >= self.history.total else None
+            rows = (model or self.history.view_at(at or 0)).gantt_json()
+        return json.dumps(rows, default=str, ensure_ascii=False)
+
     def _dump_view(self, model: ViewModel) -> str:
         data = model.to_json()
         data["total"] = self.history.total
@@ -270,6 +277,7 @@ class _Handler(BaseHTTPRequestHandler):
             "/index.html": self._index,
             "/api/info": self._info,
             "/api/view": self._view,
+            "/api/gantt": self._gantt,
             "/api/svg": self._svg,
             "/api/records": self._records,
             "/api/export": self._export,
@@ -329,6 +337,9 @@ class _Handler(BaseHTTPRequestHandler):
     def _view(self, query: dict[str, str], raw: str) -> None:
         at = _int(query.get("at"))
         self._json(self.server_viewer.view_json(at))
+
+    def _gantt(self, query: dict[str, str], raw: str) -> None:
+        self._json(self.server_viewer.gantt_json(_int(query.get("at"))))
 
     def _svg(self, query: dict[str, str], raw: str) -> None:
         from smach.introspection.layout import off_path

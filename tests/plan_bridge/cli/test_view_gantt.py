@@ -14,6 +14,7 @@ import subprocess
 import sys
 import threading
 import time
+import urllib.request
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -88,7 +89,7 @@ def test_the_journal_of_a_temporal_mission_folds_into_one_gantt_row_per_started_
     header, records = read_journal(journal)
     started = [r for r in records if r["kind"] == "action_started"]
     ended = {r["path"] + str(r["time"]): r for r in records if r["kind"] == "action_ended"}
-    view = fold(header, records).to_json()["gantt"]
+    view = fold(header, records).gantt_json()
     assert view["axis"] == "plan" and view["time_scale"] == 0.005
     # A new dispatch for the replan's plan and the retry's: every one has its rows.
     assert view["dispatches"] >= 2
@@ -146,16 +147,26 @@ def test_the_replay_page_draws_planned_and_actual_bars_of_every_action_up_to_the
     assert errors == []
 
 
-def test_the_json_view_of_a_journal_carries_the_gantt_rows(journal: Path) -> None:
-    with serve(JournalSource(journal), quiet=True) as viewer:
-        import urllib.request
+def test_the_view_counts_the_gantt_rows_and_api_gantt_sends_them_at_any_moment(
+    journal: Path,
+) -> None:
+    _, records = read_journal(journal)
+    started = [n for n, r in enumerate(records) if r["kind"] == "action_started"]
 
-        with urllib.request.urlopen(viewer.url.rstrip("/") + "/api/view") as response:
-            view = json.loads(response.read())
-    assert view["gantt"]["axis"] == "plan"
-    assert len(view["gantt"]["rows"]) == sum(
-        1 for r in read_journal(journal)[1] if r["kind"] == "action_started"
-    )
+    def get(url: str) -> Any:
+        with urllib.request.urlopen(url) as response:
+            return json.loads(response.read())
+
+    with serve(JournalSource(journal), quiet=True) as viewer:
+        base = viewer.url.rstrip("/")
+        view = get(base + "/api/view")
+        assert view["gantt"] == {"rows": len(started), "running": 0}
+        assert "rows" in get(base + "/api/gantt") and get(base + "/api/gantt")["axis"] == "plan"
+        assert len(get(base + "/api/gantt")["rows"]) == len(started)
+        at = started[2] + 1  # right after the third start
+        assert len(get(f"{base}/api/gantt?at={at}")["rows"]) == 3
+        assert get(base + "/api/gantt?at=0") is None
+        assert get(base + "/api/view?at=0")["gantt"] is None
 
 
 @pytest.mark.timeout(180)
@@ -242,9 +253,10 @@ def test_the_docs_screenshot_tool_draws_the_gantt_of_a_journal(
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
-def _long_journal(path: Path, actions: int) -> None:
+def _long_journal(path: Path, actions: int, scale: float = 0.01) -> None:
     """A journal of one temporal plan of ``actions`` actions in three overlapping lanes
-    (records as the dispatcher writes them), at time scale 0.01."""
+    (records as the dispatcher writes them), at time scale ``scale`` (0: the actions
+    take a millisecond each)."""
     tree = {"path": "/ROOT", "label": "ROOT", "type": "Executive", "outcomes": ["succeeded"],
             "input_keys": [], "output_keys": [], "is_container": True, "children": [],
             "edges": [], "initial_states": []}  # fmt: skip
@@ -258,8 +270,10 @@ def _long_journal(path: Path, actions: int) -> None:
                   "action": f"(move robot{i % 3} waypoint-with-a-long-name-{i} next-{i})",
                   "planned_start": start, "planned_duration": duration}  # fmt: skip
         t0, t1 = 10.0 + start * 0.01, 10.0 + (start + duration * 1.2) * 0.01
+        if scale == 0:
+            t0, t1 = 10.0 + i * 0.001, 10.0 + i * 0.001 + 0.0008
         lines.append({"kind": "action_started", "time": t0, "actual_start": t0 - 10.0,
-                      "time_scale": 0.01, **common})  # fmt: skip
+                      "time_scale": scale, **common})  # fmt: skip
         lines.append({"kind": "action_ended", "time": t1, "actual_start": t0 - 10.0,
                       "actual_end": t1 - 10.0, "outcome": "succeeded", **common})  # fmt: skip
     path.write_text("".join(json.dumps(line) + "\n" for line in lines))
@@ -304,3 +318,26 @@ def test_a_plan_of_150_actions_scrolls_under_a_fixed_axis_with_readable_labels(
         page.screenshot(path=str(ARTIFACTS / "gantt-150.png"))
     page.close()
     assert errors == []
+
+
+@pytest.mark.timeout(120)
+def test_a_run_at_time_scale_zero_gets_a_wall_seconds_axis_under_the_plan_seconds_one(
+    browser: Any, tmp_path: Path
+) -> None:
+    journal = tmp_path / "flat-out.jsonl"
+    _long_journal(journal, 12, scale=0.0)
+    page = browser.new_page(viewport={"width": 1400, "height": 900})
+    with serve(JournalSource(journal), quiet=True) as viewer:
+        page.goto(viewer.url)
+        page.wait_for_selector("body[data-ready='1']", timeout=10_000)
+        page.click("#gantt-toggle")
+        page.wait_for_selector("body[data-gantt-drawn='12']")
+        units = page.eval_on_selector_all(
+            "#gantt-axis text.gantt-unit", "els => els.map(e => e.textContent)"
+        )
+        assert units == ["plan s", "wall s"]
+        assert "wall seconds" in page.inner_text("#gantt-note")
+        assert "time scale 0" in page.inner_text("#gantt-note")
+        rows = _rows(page)
+        assert len(rows) == 12 and all(r["planned"] > 0 and r["actual"] > 0 for r in rows)
+    page.close()

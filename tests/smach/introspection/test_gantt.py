@@ -53,7 +53,9 @@ def _scaled_run() -> list[dict]:
 
 
 def test_an_action_started_and_ended_is_one_row_with_planned_and_actual_intervals() -> None:
-    view = fold({}, _scaled_run()).to_json()["gantt"]
+    model = fold({}, _scaled_run())
+    assert model.to_json()["gantt"] == {"rows": 4, "running": 1}  # the page's button
+    view = model.gantt_json()
     assert view["axis"] == "plan" and view["time_scale"] == 0.1 and view["dispatches"] == 2
     rows = {row["index"]: row for row in view["rows"]}
     assert [row["index"] for row in view["rows"]] == [1, 2, 3, 4]
@@ -74,7 +76,7 @@ def test_a_running_action_grows_up_to_the_moment_shown() -> None:
     for record in records:
         history.add(record)
     # After C started (6 records): A ended, B and C are running up to C's start time.
-    rows = history.view_at(6).to_json()["gantt"]["rows"]
+    rows = history.view_at(6).gantt_json()["rows"]
     assert [(r["index"], r["running"], r["outcome"]) for r in rows] == [
         (1, False, "succeeded"),
         (2, True, "running"),
@@ -83,7 +85,7 @@ def test_a_running_action_grows_up_to_the_moment_shown() -> None:
     assert rows[1]["a1"] == pytest.approx(5.0) and rows[2]["a1"] == pytest.approx(5.0)
     # Later records move the moment on: a replay at the end has B ended at 6.
     history.add({"kind": "userdata", "path": "/ROOT", "time": 102.0, "values": {}})
-    last = history.view_at(history.total).to_json()["gantt"]["rows"]
+    last = history.view_at(history.total).gantt_json()["rows"]
     assert last[1]["a1"] == pytest.approx(6.0) and last[3]["a1"] == pytest.approx(20.0)
 
 
@@ -96,7 +98,7 @@ def test_a_run_at_time_scale_zero_puts_actual_times_on_a_wall_axis() -> None:
         _start(10.01, "02_B", 2, 20.0, 3.0, scale=0.0),
         _end(10.013, "02_B"),
     ]
-    view = fold({}, records).to_json()["gantt"]
+    view = fold({}, records).gantt_json()
     assert view["axis"] == "wall"
     a, b = view["rows"]
     assert (a["a0"], a["a1"]) == pytest.approx((0.0, 0.002))
@@ -114,14 +116,14 @@ def test_a_step_started_again_is_a_new_row_and_its_end_closes_the_newest() -> No
         _start(0.1, "01_A", 1, 0.0, 1.0),
         _end(0.2, "01_A"),
     ]
-    rows = fold({}, records).to_json()["gantt"]["rows"]
+    rows = fold({}, records).gantt_json()["rows"]
     assert [(r["outcome"], r["dispatch"]) for r in rows] == [("aborted", 0), ("succeeded", 1)]
 
 
 def test_a_run_without_temporal_plans_has_no_gantt_and_bad_values_do_not_break_the_fold() -> None:
-    assert fold({}, [_dispatch(0.0)]).to_json()["gantt"] is None
+    assert fold({}, [_dispatch(0.0)]).gantt_json() is None
     odd = {"kind": "action_started", "path": f"{PLAN}/X", "time": "soon", "planned_start": None}
-    rows = fold({}, [odd, {"kind": "action_ended", "path": "/nowhere"}]).to_json()["gantt"]
+    rows = fold({}, [odd, {"kind": "action_ended", "path": "/nowhere"}]).gantt_json()
     assert rows is not None and rows["rows"][0]["planned_duration"] == 0.0
 
 
@@ -151,7 +153,7 @@ def test_a_step_whose_end_event_is_missing_ends_with_its_state() -> None:
         _start(0.0, "01_A", 1, 0.0, 1.0),
         {"kind": "container_terminated", "path": f"{PLAN}/01_A", "time": 0.3, "outcome": "aborted"},
     ]
-    (row,) = fold({}, records).to_json()["gantt"]["rows"]
+    (row,) = fold({}, records).gantt_json()["rows"]
     assert (row["outcome"], row["running"], row["a1"]) == ("aborted", False, pytest.approx(3.0))
 
 
@@ -168,7 +170,7 @@ def test_steps_running_when_a_run_was_killed_end_as_interrupted_when_it_resumes(
         _start(50.0, "03_A", 3, 0.0, 5.0),
     ]
     structure = {"path": "/ROOT", "label": "ROOT", "children": []}
-    rows = fold({"structure": structure}, records).to_json()["gantt"]["rows"]
+    rows = fold({"structure": structure}, records).gantt_json()["rows"]
     assert [(r["index"], r["outcome"]) for r in rows] == [
         (1, "interrupted"),
         (2, "succeeded"),

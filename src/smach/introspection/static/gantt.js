@@ -1,8 +1,9 @@
 // The Gantt view of temporal plans: one row per started action, its planned interval
 // (outlined) and its actual one (filled, coloured by outcome; a running action grows).
-// The server folds the rows (view.gantt, see smach/introspection/gantt.py); this file
-// only draws them. It listens to the "smach:view" event app.js sends with every view
-// (live, replay slider, play), so the bars are those of the moment shown.
+// The server folds the rows (/api/gantt, see smach/introspection/gantt.py; the view
+// itself only says how many there are); this file only draws them. It listens to the
+// "smach:view" event app.js sends with every view (live, replay slider, play) and,
+// while the Gantt is open, fetches the rows of that moment.
 "use strict";
 
 (() => {
@@ -10,7 +11,10 @@
   const ROW = 22;
   const LABEL = 290;
   const PAD = 16;
-  const G = { view: null, at: 0, open: false, timer: null, pane: null, button: null };
+  const G = {
+    view: null, data: null, at: 0, open: false, timer: null, pane: null, button: null,
+    loading: false, wanted: null, shown: null,
+  };
   window.smachGantt = G;
 
   function el(name, attrs, parent) {
@@ -95,7 +99,27 @@
     G.open = open;
     G.pane.hidden = !open;
     G.button.classList.toggle("on", open);
-    if (open) draw();
+    if (open && G.view) load(G.view.index);
+  }
+
+  // The rows at record `index` (/api/gantt): one request at a time, the newest wanted.
+  async function load(index) {
+    G.wanted = index;
+    if (G.loading) return;
+    G.loading = true;
+    try {
+      while (G.wanted !== null && G.wanted !== G.shown) {
+        const at = G.wanted;
+        const r = await fetch(`/api/gantt?at=${at}`, { cache: "no-store" });
+        if (!r.ok) throw new Error(`/api/gantt: ${r.status}`);
+        G.data = await r.json();
+        G.at = performance.now();
+        G.shown = at;
+        if (G.open) draw();
+      }
+    } finally {
+      G.loading = false;
+    }
   }
 
   // While a live run shows its newest view, running bars keep growing between views.
@@ -106,20 +130,18 @@
 
   function render(view) {
     G.view = view;
-    G.at = performance.now();
-    const gantt = view.gantt;
-    const rows = gantt ? gantt.rows.length : 0;
+    const rows = view.gantt ? view.gantt.rows : 0;
     G.button.hidden = !rows;
     G.button.textContent = rows ? `Gantt (${rows})` : "Gantt";
     document.body.dataset.ganttRows = String(rows);
     if (!rows && G.open) toggle(false);
-    if (G.open) draw();
+    if (G.open) load(view.index);
     clearInterval(G.timer);
     G.timer = live() ? setInterval(() => (live() ? draw() : clearInterval(G.timer)), 200) : null;
   }
 
   function draw() {
-    const gantt = G.view && G.view.gantt;
+    const gantt = G.data;
     const chart = document.getElementById("gantt-chart");
     const axis = document.getElementById("gantt-axis");
     chart.innerHTML = "";
@@ -214,7 +236,7 @@
       el("title", {}, actual).textContent = tip;
       el("title", {}, label).textContent = tip;
     });
-    if (G.view.running) {
+    if (rows.some((r) => r.running)) {
       const now = AX(Math.max(...rows.map((r) => r.a1)));
       el("line", { x1: now, x2: now, y1: 0, y2: height, class: "gantt-now" }, chart);
     }
