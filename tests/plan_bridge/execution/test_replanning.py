@@ -537,3 +537,31 @@ def test_a_state_the_planner_failed_from_is_not_planned_from_again() -> None:
     assert report.replans == 2 and report.holds == 2
     assert report.planner_calls == 2  # the second replan knew the answer
     assert len(planner.timeouts) == 2
+
+
+@pytest.mark.timeout(60)
+def test_a_failed_step_whose_effects_came_true_anyway_is_skipped_without_a_planner_call() -> None:
+    task = _rooms()
+    world = SimulatedWorld(task)
+    original = world.perform
+    done: list[PlanStep] = []
+
+    def perform(step: PlanStep):  # type: ignore[no-untyped-def]
+        ok, observations = original(step)
+        if step.action == "pick" and not done:
+            # The skill reports a failure, yet the world changed as the step said it
+            # would (somebody else did it): the rest of the plan is valid from there.
+            done.append(step)
+            return False, observations
+        return ok, observations
+
+    world.perform = perform  # type: ignore[method-assign]
+    planner = FirstPlanOnly()
+    executive = Executive(task, symbolic_skills(world), planner)
+    assert executive.execute() == "succeeded"
+    report = executive.report
+    assert done and report.continues == 1 and report.retries == 0
+    assert report.planner_calls == 1 and report.replans == 0
+    assert report.goal_reached and world.goal_reached()
+    skipped = next(d for d in report.decisions if d["decision"] == "continue")
+    assert skipped["step"] == str(done[0]) and "still valid" in skipped["reason"]
