@@ -30,6 +30,8 @@ __all__ = ["MAX_ACTIONS", "Dispatch", "Timeline", "gantt"]
 
 MAX_ACTIONS = 5000
 """Rows kept by the view (the oldest are dropped beyond it)."""
+DIGITS = 6
+"""Decimals of the positions sent to the page (a microsecond of wall time at most)."""
 
 
 def _number(value: Any, default: float = 0.0) -> float:
@@ -140,9 +142,10 @@ def gantt(timeline: Timeline, now: float | None) -> dict[str, Any] | None:
     """The rows of the page's Gantt view (None when the run has no temporal plan).
 
     ``now`` (a monotonic time, the moment shown) ends the bars of running actions.
-    Every row has ``p0``/``p1`` (planned interval) and ``a0``/``a1`` (actual), on the
-    axis named by ``axis``: ``"plan"`` (plan seconds) or ``"wall"`` (actual in wall
-    seconds, planned on a plan-seconds axis of its own); see the module doc.
+    Every row has ``p0``/``p1`` (planned interval) and ``a0``/``a1`` (actual), rounded
+    to :data:`DIGITS` decimals, on the axis named by ``axis``: ``"plan"`` (plan
+    seconds) or ``"wall"`` (actual in wall seconds, planned on a plan-seconds axis of
+    its own); see the module doc.
     """
     if not timeline.actions:
         return None
@@ -185,16 +188,15 @@ def gantt(timeline: Timeline, now: float | None) -> dict[str, Any] | None:
             {
                 "index": row.index,
                 "action": row.action,
-                "path": row.path,
                 "outcome": row.outcome,
                 "dispatch": row.dispatch,
                 "plan": d.plan,
                 "planned_start": row.planned_start,
                 "planned_duration": row.planned_duration,
-                "p0": p0,
-                "p1": p0 + row.planned_duration,
-                "a0": actual(row.started, row.dispatch),
-                "a1": actual(end, row.dispatch),
+                "p0": round(p0, DIGITS),
+                "p1": round(p0 + row.planned_duration, DIGITS),
+                "a0": round(actual(row.started, row.dispatch), DIGITS),
+                "a1": round(actual(end, row.dispatch), DIGITS),
                 "running": row.ended is None,
             }
         )
