@@ -41,8 +41,9 @@ class Wrapper(Container):
         output_keys: Iterable[str] | None = None,
     ) -> None:
         super().__init__(outcomes, input_keys, output_keys)
-        self._infer_outcomes = outcomes is None
-        self._infer_keys = input_keys is None and output_keys is None
+        # Whether add() takes the outcomes, and the keys, from the child. (One attribute:
+        # an instance keeps at most 29, see Container, ``_start_cbs``.)
+        self._infer = (outcomes is None, input_keys is None and output_keys is None)
         self._label: str | None = None
         self._child: State | None = None
         self._remapping: dict[str, str] = {}
@@ -60,9 +61,10 @@ class Wrapper(Container):
         self._adopt_child(label, state)
         self._label, self._child = label, state
         self._remapping = dict(remapping or {})
-        if self._infer_outcomes:
+        infer_outcomes, infer_keys = self._infer
+        if infer_outcomes:
             self.register_outcomes([*state.get_registered_outcomes(), *self.extra_outcomes])
-        if self._infer_keys:
+        if infer_keys:
             remap = self._remapping
             self.register_input_keys([remap.get(k, k) for k in state.get_registered_input_keys()])
             self.register_output_keys([remap.get(k, k) for k in state.get_registered_output_keys()])

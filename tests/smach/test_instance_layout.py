@@ -55,11 +55,21 @@ def _concurrence() -> smach.Concurrence:
     return cc
 
 
+def _retry() -> smach.Retry:
+    return smach.Retry.wrap("BODY", Leaf(["done", "aborted"]), attempts=2)
+
+
+def _timeout() -> smach.Timeout:
+    return smach.Timeout.wrap("BODY", Leaf(["done"]), timeout=5.0)
+
+
 BUILDERS = {
     "StateMachine": _machine,
     "Sequence": _sequence,
     "Iterator": _iterator,
     "Concurrence": _concurrence,
+    "Retry": _retry,
+    "Timeout": _timeout,
 }
 
 
