@@ -133,3 +133,18 @@ def test_check_plan_and_run_give_a_broken_file_the_same_verdict(
     location = f"{expected_file}:{meta['line']}:" if meta["line"] != "none" else f"{expected_file}:"
     assert location in messages[0]
     assert "Traceback" not in messages[0]
+
+
+@pytest.mark.timeout(300)
+@pytest.mark.parametrize("path", PLANNED, ids=[p.stem for p in PLANNED])
+def test_check_plan_and_run_accept_an_odd_but_valid_file_alike(
+    path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    domain, problem = pair(path, expectations(path))
+    warnings = []
+    for command in ("check", "plan", "run"):
+        assert main([command, str(domain), str(problem)]) == 0, capsys.readouterr().err
+        err = capsys.readouterr().err
+        assert "error" not in err and "Traceback" not in err
+        warnings.append([row for row in err.splitlines() if row.startswith("warning: ")])
+    assert warnings[0] == warnings[1] == warnings[2]
