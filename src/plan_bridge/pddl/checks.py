@@ -403,7 +403,15 @@ def _atom(ctx: _Context, node: Form, scope: Mapping[str, str], *, numeric: bool 
             )
             continue
         kind = _term(ctx, arg, scope)
-        if (
+        if kind == "object" and arg.text.startswith("?") and param.type in ctx.domain.types:
+            ctx.diags.error(
+                ctx.source,
+                arg.offset,
+                f"{arg.text} is untyped (type 'object'), but {param.name} of {head} needs "
+                f"type {param.type!r} in {ctx.where}",
+                f"declare it as {arg.text} - {param.type} (an untyped variable is an object)",
+            )
+        elif (
             kind is not None
             and kind in ctx.domain.types
             and not ctx.domain.is_subtype(kind, param.type)

@@ -207,9 +207,24 @@ def _declare_object_type(domain: DomainModel, problem: ProblemModel) -> list[Edi
         if isinstance(item, Atom) and item.text == "object" and not after_dash:
             return []  # declared as a type name already
     entries = [*problem.objects.values(), *domain.constants.values()]
-    if not any(entry.type == "object" for entry in entries):
+    if not any(entry.type == "object" for entry in entries) and not _untyped_quantifier(
+        domain.tree
+    ):
         return []
     return [Edit(types.end - 1, types.end - 1, " object")]
+
+
+def _untyped_quantifier(tree: Form) -> bool:
+    """Whether a ``forall``/``exists`` has an untyped variable (``(forall (?x) ...)``):
+    UP 1.3 reads it as type ``object``, which must then be declared too."""
+    for node in walk(tree):
+        if isinstance(node, Form) and node.head in ("forall", "exists") and len(node.items) > 1:
+            variables = node.items[1]
+            if isinstance(variables, Form) and variables.items:
+                last = variables.items[-1]
+                if isinstance(last, Atom) and last.text.startswith("?"):
+                    return True
+    return False
 
 
 def _type_renames(
