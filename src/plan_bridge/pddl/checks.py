@@ -258,8 +258,7 @@ def _formula(ctx: _Context, node: Node, scope: Mapping[str, str], mode: str) -> 
         target = args[0]
         cost = isinstance(target, Form) and target.head == "total-cost"
         ctx.usage.note(":action-costs" if cost else ":numeric-fluents", ctx.source, node.offset)
-        if not cost or "total-cost" in ctx.domain.functions:
-            _numeric(ctx, target, scope, note=not cost)
+        _numeric(ctx, target, scope, note=not cost)
         _numeric(ctx, args[1], scope, note=not cost)
     else:
         _atom(ctx, node, scope)
@@ -367,6 +366,13 @@ def _atom(ctx: _Context, node: Form, scope: Mapping[str, str], *, numeric: bool 
     )
     if signature is None:
         if head == "total-cost":
+            ctx.diags.error(
+                ctx.source,
+                node.offset + 1,
+                f"undeclared function 'total-cost' in {ctx.where}",
+                "declare it in the domain: (:functions (total-cost) - number), with "
+                ":action-costs in (:requirements ...)",
+            )
             return
         if not numeric and head in ctx.domain.functions:
             ctx.diags.error(
