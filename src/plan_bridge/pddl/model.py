@@ -12,6 +12,7 @@ later, by :mod:`~plan_bridge.pddl.checks`, against these declarations.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 
 from plan_bridge.pddl.diagnostics import Diagnostics
@@ -166,6 +167,10 @@ def _header(model: _Common, diags: Diagnostics) -> list[Node]:
     return body
 
 
+#: A name (or ``?variable``) unified-planning 1.3 can read.
+_NAME = re.compile(r"\??[A-Za-z][A-Za-z0-9_-]*")
+
+
 def typed_list(
     items: list[Node], source: SourceText, diags: Diagnostics, what: str, *, variables: bool = False
 ) -> tuple[list[Entry], int | None]:
@@ -210,6 +215,14 @@ def typed_list(
                 source,
                 item.offset,
                 f"{item.text!r} in the {what}: names of the {what} do not start with '?'",
+            )
+        elif not _NAME.fullmatch(item.text):
+            diags.error(
+                source,
+                item.offset,
+                f"{item.text!r} in the {what}: a PDDL name starts with a letter and has "
+                "only ASCII letters, digits, '-' and '_'",
+                "rename it (unified-planning 1.3 reads no other names)",
             )
         else:
             pending.append(item)
