@@ -17,9 +17,10 @@ from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import smach
-from plan_bridge.execution.semantics import ActionModel
+from plan_bridge.execution.semantics import ActionModel, GroundAction
 from plan_bridge.execution.snapshots import SnapshotError, decode, encode
-from plan_bridge.pddl.task import Fact, PlanningTask
+from plan_bridge.execution.world import FactSnapshot
+from plan_bridge.pddl.task import Fact, PlanningTask, format_fact, parse_fact
 from plan_bridge.planning.planner import PlanStep
 from plan_bridge.skills.registry import SkillRegistry
 
@@ -57,7 +58,14 @@ class SimulatedWorld:
     a new attribute cannot be left out of checkpoints by mistake.
     """
 
-    state: ClassVar[tuple[str, ...]] = ("_facts", "sim_time", "actions_run", "faults", "rng")
+    state: ClassVar[tuple[str, ...]] = (
+        "_facts",
+        "values",
+        "sim_time",
+        "actions_run",
+        "faults",
+        "rng",
+    )
     constant: ClassVar[tuple[str, ...]] = ("task", "model", "fail_rate", "variant")
     wiring: ClassVar[tuple[str, ...]] = ("_lock", "time_scale")
 
@@ -91,6 +99,10 @@ class SimulatedWorld:
         self.fail_rate = fail_rate
         self.variant = variant
         self._facts: set[Fact] = set(task.initial_facts if facts is None else facts)
+        #: Numeric atoms (as PDDL text, for snapshots) -> value; empty without numbers.
+        self.values: dict[str, float] = {
+            format_fact(atom): value for atom, value in self.model.initial_values().items()
+        }
         self._lock = _PacedLock()
         self.faults: list[Fault] = []
         self.sim_time = 0.0
@@ -189,7 +201,7 @@ class SimulatedWorld:
         with self._lock:
             return fact in self._facts
 
-    def perform(self, step: PlanStep) -> tuple[bool, list[tuple[Fact, bool]]]:
+    def perform(self, step: PlanStep) -> tuple[bool, list[tuple[Fact, bool | float]]]:
         """Try ``step`` in the world: (succeeded?, observations of the touched facts)."""
         ground = self.model.ground(step)
         with self._lock:
@@ -198,6 +210,8 @@ class SimulatedWorld:
             # The live set, not a copy: worlds with many static facts would pay a copy
             # of all of them per action.
             state = self._facts
+            if self.values:  # numbers too: the facts with their values
+                return self._perform_numeric(step, ground)
             adds, dels = ground.effects(state)
             touched = ground.relevant_atoms(state, (adds, dels))
             ok = ground.applicable(state)
@@ -207,7 +221,42 @@ class SimulatedWorld:
             if ok:
                 state.difference_update(dels)
                 state.update(adds)
-            observations = [(fact, fact in state) for fact in sorted(touched)]
+            observations: list[tuple[Fact, bool | float]] = [
+                (fact, fact in state) for fact in sorted(touched)
+            ]
+        return ok, observations
+
+    def state_now(self) -> FactSnapshot:
+        """The true facts and numbers (call with the lock held)."""
+        return FactSnapshot(
+            self._facts, {parse_fact(atom): value for atom, value in self.values.items()}
+        )
+
+    def _perform_numeric(
+        self, step: PlanStep, ground: GroundAction
+    ) -> tuple[bool, list[tuple[Fact, bool | float]]]:
+        """:meth:`perform` in a world with numbers (call with the lock held): numeric
+        conditions and effects apply, and the numbers the action changes are observed."""
+        state = self.state_now()
+        adds, dels, values = ground.all_effects(state)
+        touched = ground.relevant_atoms(state, (adds, dels))
+        ok = ground.applicable(state)
+        if ok and self.fail_rate and self.rng.random() < self.fail_rate:
+            self.inject("action-failed", str(step), "the action had no effect")
+            ok = False
+        if ok:
+            self._facts.difference_update(dels)
+            self._facts.update(adds)
+            for atom, value in values.items():
+                self.values[format_fact(atom)] = value
+        observations: list[tuple[Fact, bool | float]] = [
+            (fact, fact in self._facts) for fact in sorted(touched)
+        ]
+        observations.extend(
+            (atom, self.values[format_fact(atom)])
+            for atom in sorted(values)
+            if format_fact(atom) in self.values
+        )
         return ok, observations
 
 

@@ -32,8 +32,8 @@ from typing import Any, ClassVar
 import smach
 from plan_bridge.execution.semantics import GroundAction
 from plan_bridge.execution.simulation import SimulatedWorld
-from plan_bridge.execution.world import FactSnapshot, values_of
-from plan_bridge.pddl.task import Fact, PlanningTask, format_fact, parse_fact
+from plan_bridge.execution.world import values_of
+from plan_bridge.pddl.task import Fact, PlanningTask, format_fact
 from plan_bridge.planning.planner import PlanStep
 from plan_bridge.skills.registry import SkillRegistry
 
@@ -46,25 +46,15 @@ _SLICE_S = 0.005
 class TimedWorld(SimulatedWorld):
     """True facts and numbers of a temporal/numeric domain, with timed faults."""
 
-    state: ClassVar[tuple[str, ...]] = ("values", "_undo")
+    state: ClassVar[tuple[str, ...]] = ("_undo",)
     fault_scale: ClassVar[Mapping[str, float]] = {"late": 1.0, "halfway": 1.0, "drift": 1.0}
     #: How much faster a drifting numeric decrease is than modelled.
     drift_factor = 1.5
 
     def __init__(self, task: PlanningTask, **options: Any) -> None:
         super().__init__(task, **options)
-        #: Numeric atoms (as PDDL text, for snapshots) -> value.
-        self.values: dict[str, float] = {
-            format_fact(atom): value for atom, value in self.model.initial_values().items()
-        }
         #: Steps failing halfway -> (facts to add back, facts to remove) when they end.
         self._undo: dict[str, tuple[set[Fact], set[Fact]]] = {}
-
-    def state_now(self) -> FactSnapshot:
-        """The true facts and numbers (call with the lock held)."""
-        return FactSnapshot(
-            self._facts, {parse_fact(atom): value for atom, value in self.values.items()}
-        )
 
     @property
     def facts(self) -> frozenset[Fact]:

@@ -290,3 +290,25 @@ def test_a_world_with_a_time_scale_waits_after_releasing_its_lock(
     assert waits == [(0.25 * world.action_duration, False)]
     world.restore(world.snapshot())  # putting a state back takes no time
     assert len(waits) == 1
+
+
+def test_a_numeric_domain_runs_in_the_simulated_world_with_its_numbers() -> None:
+    from plan_bridge.planning.planner import PlanStep
+
+    corpus = Path(__file__).resolve().parents[1] / "pddl" / "corpus"
+    task = load_task(
+        corpus / "domain-numeric-without-requirement.pddl", corpus / "base" / "fuel-problem.pddl"
+    )
+    world = SimulatedWorld(task)
+    assert world.values == {"(fuel van)": 5.0}
+    ok, observations = world.perform(PlanStep("drive", ("van", "depot", "shop")))
+    assert ok
+    assert (("fuel", "van"), 4.0) in observations  # the number it changed, observed
+    assert world.values["(fuel van)"] == 4.0
+    world.values["(fuel van)"] = 0.0
+    ok, _ = world.perform(PlanStep("drive", ("van", "shop", "depot")))
+    assert not ok  # (>= (fuel van) 1) does not hold
+    saved = world.snapshot()
+    other = SimulatedWorld(task)
+    other.restore(json.loads(json.dumps(saved)))
+    assert other.values == {"(fuel van)": 0.0}
