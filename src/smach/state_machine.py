@@ -452,7 +452,9 @@ class StateMachine(Container):
 
     # -- preemption ------------------------------------------------------------------------------
     def request_preempt(self) -> None:
-        super().request_preempt()
+        # Our own flag only: the running child is reached once, through
+        # _preempt_current (Container.request_preempt would forward a second time).
+        super(Container, self).request_preempt()
         slot = self._current_slot
         if slot is not None:
             self._preempt_current(slot.state)

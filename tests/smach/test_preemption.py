@@ -75,6 +75,19 @@ def test_preempt_during_a_child_reaches_the_running_child() -> None:
     assert_clean(sm)
 
 
+def test_a_preempt_reaches_the_running_child_once() -> None:
+    from smach.introspection.events import PreemptRequested
+
+    blocker = Blocker()
+    sm = sm_of(blocker)
+    seen: list[str] = []
+    sm.add_listener(lambda e: seen.append(e.path) if isinstance(e, PreemptRequested) else None)
+    thread = preempt_when(blocker.started, sm)
+    assert sm.execute() == "preempted"
+    join(thread)
+    assert sorted(seen) == ["/ROOT", "/ROOT/S"]  # one request each, none twice
+
+
 def test_state_blocked_on_preempt_event_returns_preempted() -> None:
     class WaitsOnEvent(smach.State):
         def __init__(self) -> None:
