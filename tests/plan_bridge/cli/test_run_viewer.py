@@ -118,8 +118,16 @@ def test_a_simulated_mission_runs_at_a_pace_the_page_can_show(mission: Any) -> N
     sync_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
     if not Path(CHROMIUM).exists():
         pytest.skip("chromium is not installed")
-    run = mission(str(DOMAINS / "fetch_drink"), "--viewer", "--time-scale", "0.03")
+    from plan_bridge.cli import main
+
+    # Held at its first state until the page is up (a loaded machine may take seconds
+    # to start the browser), then resumed from the command line.
+    run = mission(
+        str(DOMAINS / "fetch_drink"), "--viewer", "--time-scale", "0.03",
+        "--control", "--start-paused",
+    )  # fmt: skip
     url = run.url()
+    control = run.wait_line("control: ").split(": ", 1)[1].strip()
     seen: set[str] = set()
     with sync_api.sync_playwright() as p:
         browser = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
@@ -127,6 +135,7 @@ def test_a_simulated_mission_runs_at_a_pace_the_page_can_show(mission: Any) -> N
             page = browser.new_page(viewport={"width": 1400, "height": 900})
             page.goto(url)
             page.wait_for_selector("body[data-ready='1']", timeout=20_000)
+            assert main(["control", control, "resume"]) == 0
             # While the mission runs, the page shows its skills' states one after another.
             while not any(line.startswith("viewer: ") for line in run.lines):
                 seen.update(

@@ -169,7 +169,8 @@ def test_cli_serves_a_remote_executive_and_fails_cleanly(ros: Any) -> None:
             conn.close()
             assert info["live"] is True and "/cli_test" in info["title"]
             process.send_signal(signal.SIGINT)  # Ctrl-C: the viewer closes and exits 0
-            assert process.wait(10) == 0
+            code = process.wait(30)
+            assert code == 0, f"exit {code}: {process.stderr.read()}"
         finally:
             if process.poll() is None:
                 process.kill()
