@@ -19,11 +19,17 @@ Faults, each with probability ``fail_rate x fault_scale[kind]``:
 * ``drift``: its numeric decreases are 1.5 times what the model says (a battery
   draining faster than modelled), which the belief learns from the observation.
 
+The faults of a step are drawn from a generator of its own, seeded by the world's
+seed, the step and how many times it began before: two robots' steps that start at
+the same moment draw the same faults whichever thread comes first, so a seeded run
+meets the same faults on the same steps every time.
+
 Instantaneous actions of a temporal domain run as plain symbolic steps.
 """
 
 from __future__ import annotations
 
+import random
 import threading
 import time
 from collections.abc import Mapping
@@ -46,15 +52,28 @@ _SLICE_S = 0.005
 class TimedWorld(SimulatedWorld):
     """True facts and numbers of a temporal/numeric domain, with timed faults."""
 
-    state: ClassVar[tuple[str, ...]] = ("_undo",)
+    state: ClassVar[tuple[str, ...]] = ("_undo", "begun")
+    constant: ClassVar[tuple[str, ...]] = ("seed",)
+    wiring: ClassVar[tuple[str, ...]] = ("_drawing", "_count_lock")
     fault_scale: ClassVar[Mapping[str, float]] = {"late": 1.0, "halfway": 1.0, "drift": 1.0}
     #: How much faster a drifting numeric decrease is than modelled.
     drift_factor = 1.5
 
-    def __init__(self, task: PlanningTask, **options: Any) -> None:
-        super().__init__(task, **options)
+    def __init__(self, task: PlanningTask, *, seed: int | None = 0, **options: Any) -> None:
+        if seed is None:  # an unseeded world still draws every step's faults from a seed
+            seed = random.SystemRandom().randrange(2**63)
+        super().__init__(task, seed=seed, **options)
+        self.seed = seed
         #: Steps failing halfway -> (facts to add back, facts to remove) when they end.
         self._undo: dict[str, tuple[set[Fact], set[Fact]]] = {}
+        #: Step (as PDDL text) -> how many times it began.
+        self.begun: dict[str, int] = {}
+        self._drawing = threading.local()
+        self._count_lock = threading.Lock()
+
+    def chance(self, kind: str, rng: random.Random | None = None) -> bool:
+        # In begin(): the generator of the step beginning in this thread.
+        return super().chance(kind, rng or getattr(self._drawing, "rng", None))
 
     @property
     def facts(self) -> frozenset[Fact]:
@@ -74,6 +93,16 @@ class TimedWorld(SimulatedWorld):
         """Start ``step``: (started?, faults drawn for it). A step that will fail
         halfway keeps its at-start effects in :attr:`_undo` until it ends."""
         ground = self.model.ground(step)
+        with self._count_lock:
+            n = self.begun.get(str(step), 0)
+            self.begun[str(step)] = n + 1
+        self._drawing.rng = random.Random(f"{self.seed}/{step}/{n}")
+        try:
+            return self._begin(step, ground)
+        finally:
+            self._drawing.rng = None
+
+    def _begin(self, step: PlanStep, ground: GroundAction) -> tuple[bool, set[str]]:
         with self._lock:
             self.actions_run += 1
             state = self.state_now()
