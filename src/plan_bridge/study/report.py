@@ -77,6 +77,10 @@ def summarise_results(rows: Iterable[dict[str, str]]) -> list[dict[str, Any]]:
                 "mean_faults": round(sum(_f(r["faults_injected"]) for r in items) / len(items), 2),
                 "planning_share": round(planning / total, 4) if total else 0.0,
                 "mean_replans": round(sum(_f(r["replans"]) for r in items) / len(items), 2),
+                "mean_planner_calls": round(
+                    sum(_f(r.get("planner_calls", "")) for r in items) / len(items), 2
+                ),
+                "mean_repairs": round(sum(_f(r.get("repairs", "")) for r in items) / len(items), 2),
                 **{
                     f"absorbed_{layer}": round(
                         sum(_f(r[f"absorbed_{layer}"]) for r in items) / len(items), 3
@@ -342,8 +346,8 @@ def write_report(
         "",
         "## Success rate by fault rate",
         "",
-        "| target | approach | fault rate | runs | goal reached | 95% CI | median wall time of successful runs (s) [95% CI] | mean wall time, all runs (s) | mean sim time of successful runs (s) | planning share | replans/run |",
-        "|---|---|---:|---:|---:|---|---:|---:|---:|---:|---:|",
+        "| target | approach | fault rate | runs | goal reached | 95% CI | median wall time of successful runs (s) [95% CI] | mean wall time, all runs (s) | mean sim time of successful runs (s) | planning share | planner calls/run | replans/run | repairs/run |",
+        "|---|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for s in summary:
         name = f"{s['target']} ({s['variant']})" if s["variant"] else s["target"]
@@ -356,7 +360,8 @@ def write_report(
             f"| {name} | {s['approach']} | {s['fault_rate']:g} | {s['runs']} | "
             f"{s['success_rate'] * 100:.0f}% | {s['ci_low'] * 100:.0f}-{s['ci_high'] * 100:.0f}% | "
             f"{median} | {s['mean_wall_time_all_s']:.3f} | {_num(s['mean_sim_time_s'], '.1f')} | "
-            f"{s['planning_share'] * 100:.0f}% | {s['mean_replans']:.2f} |"
+            f"{s['planning_share'] * 100:.0f}% | {s['mean_planner_calls']:.2f} | "
+            f"{s['mean_replans']:.2f} | {s['mean_repairs']:.2f} |"
         )
     lines += _comparison_section(comparisons)
     lines += [

@@ -41,3 +41,35 @@ def test_every_run_of_a_study_records_its_planner_calls_replans_and_repairs(
         assert 0 <= int(row["planner_calls"]) - 1 <= int(row["replans"]) and int(row["replans"]), (
             row
         )
+
+
+def test_the_study_summary_shows_planner_calls_replans_and_repairs_per_run(
+    tmp_path: Path,
+) -> None:
+    from plan_bridge.study.report import summarise_results, write_report
+
+    base = {name: "0" for name in FIELDS}
+    base.update(target="rooms", variant="", approach="planned", fault_rate="0.2")
+    base.update(outcome="succeeded", goal_reached="True", wall_time_s="1.0")
+    rows = [
+        {**base, "seed": "0", "planner_calls": "3", "replans": "2", "repairs": "1"},
+        {**base, "seed": "1", "planner_calls": "1", "replans": "0", "repairs": "4"},
+    ]
+    (summary,) = summarise_results(rows)
+    assert (summary["mean_planner_calls"], summary["mean_replans"], summary["mean_repairs"]) == (
+        2.0,
+        1.0,
+        2.5,
+    )
+    report = write_report(rows, tmp_path, [], "plan-bridge study rooms").read_text()
+    header = next(line for line in report.splitlines() if "planner calls/run" in line)
+    row = next(line for line in report.splitlines() if line.startswith("| rooms | planned |"))
+    columns = [c.strip() for c in header.split("|")]
+    cells = [c.strip() for c in row.split("|")]
+    assert [
+        cells[columns.index(c)] for c in ("planner calls/run", "replans/run", "repairs/run")
+    ] == [
+        "2.00",
+        "1.00",
+        "2.50",
+    ]
