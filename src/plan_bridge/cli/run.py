@@ -184,6 +184,9 @@ RESUMABLE = (
     "timeout",
     "concurrent",
 )
+#: Run options a resume takes from the journal unless given again (journals written
+#: before they were recorded lack them).
+RESUMED_UNLESS_GIVEN = ("time_scale",)
 
 
 def _resume_arguments(
@@ -205,6 +208,9 @@ def _resume_arguments(
         )
     for key in RESUMABLE:
         setattr(args, key, run[key])
+    for key in RESUMED_UNLESS_GIVEN:
+        if getattr(args, key) is None and run.get(key) is not None:
+            setattr(args, key, run[key])
     if run.get("ros"):
         return fail(
             f"{args.resume}: a run with --ros cannot be resumed: the robot's world lives in its "
@@ -348,7 +354,7 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
     journal = None
     journal_path = args.resume or args.journal
     if journal_path:
-        run_options = {key: getattr(args, key) for key in RESUMABLE}
+        run_options = {key: getattr(args, key) for key in (*RESUMABLE, *RESUMED_UNLESS_GIVEN)}
         run_options.update(
             target=str(args.target), problem=str(target.problem_path), fail_rate=fail_rate
         )

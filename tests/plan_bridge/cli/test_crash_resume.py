@@ -167,3 +167,29 @@ def test_resume_refuses_a_finished_run_and_a_foreign_file(tmp_path: Path) -> Non
         timeout=60,
     )
     assert both.returncode == 2 and "give no TARGET" in both.stderr
+
+
+@pytest.mark.timeout(300)
+def test_a_resumed_run_keeps_its_time_scale_unless_given_another(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    journal = tmp_path / "run.jsonl"
+    _run_json(
+        capsys, str(DOMAINS / "timed_courier"), "--seed", "3", "--time-scale", "0.002",
+        "--journal", str(journal),
+    )  # fmt: skip
+    data = journal.read_bytes()
+    # Cut before the second step started: the rest runs in the resumed process.
+    second = data.index(b'"kind": "action_started"', data.index(b'"kind": "action_started"') + 1)
+    cut = data.rfind(b"\n", 0, second) + 1
+
+    def resumed_scales(*extra: str) -> set[float]:
+        killed = tmp_path / f"killed{len(extra)}.jsonl"
+        killed.write_bytes(data[:cut])
+        assert _run_json(capsys, "--resume", str(killed), *extra)["goal_reached"]
+        _, records = read_journal(killed)
+        after = records[[r["kind"] for r in records].index("resumed") :]
+        return {r["time_scale"] for r in after if r["kind"] == "action_started"}
+
+    assert resumed_scales() == {0.002}  # from the journal's header
+    assert resumed_scales("--time-scale", "0") == {0.0}  # given again: that one
