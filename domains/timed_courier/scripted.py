@@ -76,6 +76,7 @@ class TimedAction(smach.State):
                 inner = smach.UserData()
                 inner.duration = self.duration
                 inner.end_ready = self._end_ready
+                inner.begun = lambda: None  # the script orders its crossings itself
                 skill = TimedSkill(self.world, self.step)
                 if self.preempt_requested():
                     self.service_preempt()

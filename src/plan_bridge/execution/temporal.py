@@ -25,8 +25,13 @@ listener, no polling) and a violation preempts its skill: the step ends ``aborte
 naming the condition. When the skill succeeds, the at-end conditions are checked and
 the at-end effects applied, computed in the belief of that moment (a battery drained
 meanwhile by another action is decreased from its current value). Skills receive the
-planned duration in ``ud.duration`` (plan seconds) besides the usual step keys, and
-``ud.end_ready``: a callable that returns once the plan lets the step end.
+planned duration in ``ud.duration`` (plan seconds) besides the usual step keys,
+``ud.end_ready``: a callable that returns once the plan lets the step end, and
+``ud.begun``: a callable a skill that declares it as an input key calls once its
+action has begun (the robot took it up); a step's *start point*, which the steps
+planned to start during it wait for, is that call, or for a skill without it the
+moment its skill starts. (A door held open at the start of one step is open before
+the step that passes through it begins, whichever thread runs first.)
 
 **When a step ends.** A step's end waits for the points planned before it of the
 steps it interferes with (:func:`end_precedence`): a door held for a robot passing
@@ -74,6 +79,7 @@ from plan_bridge.skills.registry import OBSERVATIONS_KEY, STEP_KEYS, SkillRegist
 from smach.introspection.events import Event, stamp
 
 __all__ = [
+    "BEGUN_KEY",
     "DURATION_KEY",
     "END_READY_KEY",
     "ActionEnded",
@@ -94,7 +100,10 @@ DURATION_KEY = "duration"
 #: world: it returns once the plan allows this step to end (a door is held until
 #: the robot passing through it is through).
 END_READY_KEY = "end_ready"
-_TIMED_STEP_KEYS = (*STEP_KEYS, DURATION_KEY, END_READY_KEY)
+#: Userdata key of a callable a skill that declares it calls once its action has begun
+#: in the world: the step's start point, for the steps that wait for it.
+BEGUN_KEY = "begun"
+_TIMED_STEP_KEYS = (*STEP_KEYS, DURATION_KEY, END_READY_KEY, BEGUN_KEY)
 #: Plan times closer than this are the same instant (engines separate by epsilon).
 EPSILON = 1e-6
 POLICIES = ("finish", "preempt")
@@ -323,6 +332,10 @@ class TimedStepState(StepState):
         #: Called when the skill succeeded, before the end point: the dispatcher
         #: holds the end until the points planned before it have happened.
         self.before_end: Callable[[], None] | None = None
+        #: Called once at the step's start point (see :data:`BEGUN_KEY`).
+        self.on_begun: Callable[[], None] | None = None
+        self._begun_once = threading.Lock()
+        self._has_begun = False
         #: Held from reading the belief to applying the effects computed from it (the
         #: dispatch shares one between its steps): two steps increasing the same
         #: number at once must not both add to the old value.
@@ -369,12 +382,19 @@ class TimedStepState(StepState):
         data["params"] = ground.binding
         data[DURATION_KEY] = self.timing.planned_duration
         data[END_READY_KEY] = self._end_ready
+        data[BEGUN_KEY] = self._begun
+        self._has_begun = False
         data.pop(OBSERVATIONS_KEY, None)
         watch = self._watch(child)
         self.belief.add_listener(watch)
         try:
             watch()  # the start effects may already break the invariant
-            skill_outcome = self.run_child()
+            if BEGUN_KEY not in child.get_registered_input_keys():
+                self._begun()  # a skill that does not tell: it begins now
+            try:
+                skill_outcome = self.run_child()
+            finally:
+                self._begun()  # a skill that returned without telling (it failed to begin)
             if self.before_end is not None and not self._violation:
                 self.before_end()
         finally:
@@ -410,6 +430,14 @@ class TimedStepState(StepState):
     def _end_ready(self) -> None:
         if self.before_end is not None and not self._violation:
             self.before_end()
+
+    def _begun(self) -> None:
+        with self._begun_once:
+            if self._has_begun:
+                return
+            self._has_begun = True
+        if self.on_begun is not None:
+            self.on_begun()
 
     def _watch(self, child: smach.State) -> Callable[[], None]:
         """A belief listener: preempt the skill when an over-all condition breaks."""
@@ -614,6 +642,7 @@ class TemporalDispatch(smach.Container):
             state.clock = since_start
             state.time_scale = self.time_scale
             state.before_end = lambda i=index: self._await_end(run, i)
+            state.on_begun = lambda i=index: self._begun(run, i)
         self._run_state = run
         self.belief.add_listener(self._poke)
         try:
@@ -650,6 +679,12 @@ class TemporalDispatch(smach.Container):
                     self._wake.wait()
             finally:
                 run.holding.discard(i)
+
+    def _begun(self, run: _Dispatch, i: int) -> None:
+        """Step ``i``'s start point happened (its skill began its action)."""
+        with self._wake:
+            run.started.setdefault(i, time.monotonic())
+            self._wake.notify_all()
 
     def _poke(self) -> None:
         with self._wake:
@@ -710,12 +745,14 @@ class TemporalDispatch(smach.Container):
             at = self._ready_at(run, j)
             if at is not None:
                 self._launch(run, j)
+                # Started by force: its start point is now (it will report why it
+                # cannot run), and the steps planned with it may go ahead.
+                run.started.setdefault(j, time.monotonic())
                 return True
         return False
 
     def _launch(self, run: _Dispatch, j: int) -> None:
-        run.waiting.remove(j)
-        run.started[j] = time.monotonic()
+        run.waiting.remove(j)  # its start point is when its skill begins (_begun)
         label = self.labels[j]
         thread = threading.Thread(
             target=self._run_child, args=(run, j), name=f"dispatch-{label}", daemon=True
@@ -737,6 +774,7 @@ class TemporalDispatch(smach.Container):
         with self._wake:
             run.running.pop(j, None)
             run.ended[j] = time.monotonic()
+            run.started.setdefault(j, run.ended[j])  # a step that ended before it began
             run.outcomes[j] = outcome
             if outcome != "succeeded" and run.failure is None and not run.errors:
                 run.failure = outcome

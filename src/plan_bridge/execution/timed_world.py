@@ -169,7 +169,7 @@ class TimedSkill(smach.State):
     def __init__(self, world: TimedWorld, step: PlanStep) -> None:
         super().__init__(
             outcomes=["succeeded", "aborted", "preempted"],
-            input_keys=["duration", "end_ready"],
+            input_keys=["duration", "end_ready", "begun"],
             output_keys=["observations"],
         )
         self.world = world
@@ -184,6 +184,7 @@ class TimedSkill(smach.State):
         if not started:
             ud.observations = self.world.readings(ground)
             return "aborted"
+        ud.begun()  # the steps planned to start during this one may begin now
         duration = float(ud.duration or 0.0)
         if "late" in faults:
             duration *= 2.0

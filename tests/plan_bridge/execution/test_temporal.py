@@ -221,3 +221,45 @@ def test_overlapping_steps_increasing_one_number_lose_no_increase() -> None:
     assert outcome == "succeeded"
     # Every step adds 1 at its start and 1 at its end, all at once in 24 threads.
     assert belief.values[("count",)] == 2.0 * len(bots)
+
+
+class SlowToBegin(smach.State):
+    """A skill that takes its action up only after ``delay`` s, then tells (ud.begun)."""
+
+    def __init__(self, delay: float, times: dict[str, float]) -> None:
+        super().__init__(["succeeded", "aborted", "preempted"], input_keys=["begun"])
+        self.delay = delay
+        self.times = times
+
+    def execute(self, ud: smach.UserData) -> str:
+        time.sleep(self.delay)
+        self.times["light begun"] = time.monotonic()
+        ud.begun()
+        return "succeeded"
+
+
+class Stamp(smach.State):
+    def __init__(self, times: dict[str, float], name: str) -> None:
+        super().__init__(["succeeded", "aborted", "preempted"])
+        self.times = times
+        self.name = name
+
+    def execute(self, ud: smach.UserData) -> str:
+        self.times[self.name] = time.monotonic()
+        return "succeeded"
+
+
+def test_a_step_planned_during_another_waits_until_that_one_has_begun(
+    task: PlanningTask,
+) -> None:
+    times: dict[str, float] = {}
+    registry = SkillRegistry()
+    registry.fallback = lambda step: (
+        SlowToBegin(0.2, times) if step.action == "hold-light" else Stamp(times, step.action)
+    )
+    steps = [PLAN[0], PLAN[2]]  # the inspection is planned while the light is held
+    assert (0, "start") in {(e.before, e.point) for e in precedence(steps, ActionModel(task))[1]}
+    outcome, _, _, _ = run(task, registry, PLAN)
+    assert outcome == "succeeded"
+    # The inspection began only once the holder said its action had begun.
+    assert times["inspect"] >= times["light begun"]
