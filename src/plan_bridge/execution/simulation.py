@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import smach
-from plan_bridge.execution.semantics import ActionModel, GroundAction
+from plan_bridge.execution.semantics import ActionModel
 from plan_bridge.execution.snapshots import SnapshotError, decode, encode
 from plan_bridge.execution.world import FactSnapshot
 from plan_bridge.pddl.task import Fact, PlanningTask, format_fact, parse_fact
@@ -208,56 +208,41 @@ class SimulatedWorld:
             self.actions_run += 1
             self.sim_time += self.action_duration
             # The live set, not a copy: worlds with many static facts would pay a copy
-            # of all of them per action.
-            state = self._facts
-            if self.values:  # numbers too: the facts with their values
-                return self._perform_numeric(step, ground)
-            adds, dels = ground.effects(state)
+            # of all of them per action; with numbers, the facts with their values.
+            state = self.state_now() if self.values else self._facts
+            if self.values:
+                adds, dels, values = ground.all_effects(state)
+            else:
+                (adds, dels), values = ground.effects(state), {}
             touched = ground.relevant_atoms(state, (adds, dels))
             ok = ground.applicable(state)
             if ok and self.fail_rate and self.rng.random() < self.fail_rate:
                 self.inject("action-failed", str(step), "the action had no effect")
                 ok = False
             if ok:
-                state.difference_update(dels)
-                state.update(adds)
+                self._apply(adds, dels, values)
             observations: list[tuple[Fact, bool | float]] = [
-                (fact, fact in state) for fact in sorted(touched)
+                (fact, fact in self._facts) for fact in sorted(touched)
             ]
+            observations.extend(
+                (atom, self.values[format_fact(atom)])
+                for atom in sorted(values)
+                if format_fact(atom) in self.values
+            )
         return ok, observations
+
+    def _apply(self, adds: set[Fact], dels: set[Fact], values: Mapping[Fact, float]) -> None:
+        """Change the true facts and numbers (call with the lock held)."""
+        self._facts.difference_update(dels)
+        self._facts.update(adds)
+        for atom, value in values.items():
+            self.values[format_fact(atom)] = value
 
     def state_now(self) -> FactSnapshot:
         """The true facts and numbers (call with the lock held)."""
         return FactSnapshot(
             self._facts, {parse_fact(atom): value for atom, value in self.values.items()}
         )
-
-    def _perform_numeric(
-        self, step: PlanStep, ground: GroundAction
-    ) -> tuple[bool, list[tuple[Fact, bool | float]]]:
-        """:meth:`perform` in a world with numbers (call with the lock held): numeric
-        conditions and effects apply, and the numbers the action changes are observed."""
-        state = self.state_now()
-        adds, dels, values = ground.all_effects(state)
-        touched = ground.relevant_atoms(state, (adds, dels))
-        ok = ground.applicable(state)
-        if ok and self.fail_rate and self.rng.random() < self.fail_rate:
-            self.inject("action-failed", str(step), "the action had no effect")
-            ok = False
-        if ok:
-            self._facts.difference_update(dels)
-            self._facts.update(adds)
-            for atom, value in values.items():
-                self.values[format_fact(atom)] = value
-        observations: list[tuple[Fact, bool | float]] = [
-            (fact, fact in self._facts) for fact in sorted(touched)
-        ]
-        observations.extend(
-            (atom, self.values[format_fact(atom)])
-            for atom in sorted(values)
-            if format_fact(atom) in self.values
-        )
-        return ok, observations
 
 
 class _PacedLock:

@@ -39,7 +39,7 @@ import smach
 from plan_bridge.execution.semantics import GroundAction
 from plan_bridge.execution.simulation import SimulatedWorld
 from plan_bridge.execution.world import values_of
-from plan_bridge.pddl.task import Fact, PlanningTask, format_fact
+from plan_bridge.pddl.task import Fact, PlanningTask
 from plan_bridge.planning.planner import PlanStep
 from plan_bridge.skills.registry import SkillRegistry
 
@@ -82,12 +82,6 @@ class TimedWorld(SimulatedWorld):
 
     def goal_reached(self) -> bool:
         return self.model.goal_holds(self.facts)
-
-    def _apply(self, adds: set[Fact], dels: set[Fact], values: Mapping[Fact, float]) -> None:
-        self._facts.difference_update(dels)
-        self._facts.update(adds)
-        for atom, value in values.items():
-            self.values[format_fact(atom)] = value
 
     def begin(self, step: PlanStep) -> tuple[bool, set[str]]:
         """Start ``step``: (started?, faults drawn for it). A step that will fail
