@@ -21,8 +21,17 @@ package needs the ROS build toolchain. So one skill is three calls, all under
    ``response.string_value`` is the JSON object ``{"outcome": "succeeded" | "aborted",
    "observations": [["(at robot1 hall)", true], ...], "detail": "..."}``.
 
-``perform`` (``BasicTypes``: PDDL text in, JSON result out) does all three in one
-blocking call, for the service transport; ``facts`` (``std_srvs/Trigger``) returns
+``perform`` (``BasicTypes``) does all three in one service, for the service
+transport: ``request.string_value`` is the ground action, ``request.int64_value`` a
+request id the client draws per execution, ``request.float64_value`` how long the
+server may hold the call (seconds, at most :data:`MAX_PERFORM_HOLD`). The first
+request with an id starts the action; the reply comes when it ends or when the hold
+passes: ``response.int64_value`` is :data:`PERFORM_DONE` (``bool_value`` and the JSON
+result in ``string_value``, as ``report``) or :data:`PERFORM_RUNNING`. The client asks
+again with the same id until done; a repeated id never runs the action twice. So a
+reply lost on the way (Fast DDS drops one when the server has not yet matched a new
+client's reply reader) costs one resend, never a mission. Id 0 performs at once and
+replies when done (one blocking call). ``facts`` (``std_srvs/Trigger``) returns
 the JSON list of the facts true in the simulated world; ``info`` (``Trigger``) returns
 a JSON object describing the robot node (see :func:`task_digest` and
 ``SkillServer.info``). A robot node that runs a domain's own skills (a domain folder)
@@ -45,6 +54,10 @@ __all__ = [
     "FACTS_SERVICE",
     "INFO_SERVICE",
     "MAX_PAYLOAD",
+    "MAX_PERFORM_HOLD",
+    "PERFORM_DONE",
+    "PERFORM_HOLD",
+    "PERFORM_RUNNING",
     "PERFORM_SERVICE",
     "REPORT_SERVICE",
     "SUBMIT_SERVICE",
@@ -61,6 +74,12 @@ REPORT_SERVICE = "report"
 PERFORM_SERVICE = "perform"
 FACTS_SERVICE = "facts"
 INFO_SERVICE = "info"
+#: ``perform`` replies: ``response.int64_value`` is one of these.
+PERFORM_RUNNING = 0
+PERFORM_DONE = 1
+#: How long a client lets the server hold a ``perform`` call (s), and the most a server holds.
+PERFORM_HOLD = 1.0
+MAX_PERFORM_HOLD = 30.0
 #: Largest result payload a client accepts (bytes of JSON).
 MAX_PAYLOAD = 1_000_000
 

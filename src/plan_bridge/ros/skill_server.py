@@ -51,6 +51,9 @@ from plan_bridge.ros.pacing import Pacer, Run, pace
 from plan_bridge.ros.protocol import (
     FACTS_SERVICE,
     INFO_SERVICE,
+    MAX_PERFORM_HOLD,
+    PERFORM_DONE,
+    PERFORM_RUNNING,
     PERFORM_SERVICE,
     REPORT_SERVICE,
     SUBMIT_SERVICE,
@@ -86,6 +89,25 @@ SHORT_LEASE_PROFILE = """<?xml version="1.0" encoding="UTF-8" ?>
   </builtin></rtps></participant>
 </profiles></dds>
 """
+
+
+class _Performance:
+    """One ``perform`` request: its action text and, once done, its JSON result."""
+
+    def __init__(self, text: str) -> None:
+        self.text = text
+        self.done = threading.Event()
+        self.ok = False
+        self.result = ""
+
+    def finish(self, ok: bool, result: str) -> None:
+        """Record the outcome and the JSON result payload; wakes every waiting request."""
+        self.ok = ok
+        self.result = result
+        self.done.set()
+
+    def refuse(self, reason: str) -> None:
+        self.finish(False, encode_result(False, [], reason))
 
 
 class SkillServer:
@@ -136,6 +158,8 @@ class SkillServer:
         self._tickets: dict[int, PlanStep] = {}
         self._reports: dict[int, str] = {}
         self._next_ticket = 1
+        # perform requests by request id (a repeated request joins the first one).
+        self._performances: dict[int, _Performance] = {}
         # Goals being executed: goal id -> (run, skill state once built, step).
         self._runs: dict[bytes, tuple[Run, smach.State | None, PlanStep]] = {}
         self._servers: list[Any] = []
@@ -250,12 +274,44 @@ class SkillServer:
         return response
 
     def _on_perform(self, request: Any, response: Any) -> Any:
+        ident = int(request.int64_value)
+        if ident == 0:  # no request id: perform now and answer when done (not repeatable)
+            job = _Performance(request.string_value)
+            self._perform(job)
+        else:
+            job = self._performance(ident, request.string_value)
+            hold = float(request.float64_value)
+            job.done.wait(min(hold, MAX_PERFORM_HOLD) if hold > 0 else None)
+        done = job.done.is_set()
+        response.int64_value = PERFORM_DONE if done else PERFORM_RUNNING
+        response.bool_value = job.ok
+        response.string_value = job.result
+        return response
+
+    def _performance(self, ident: int, text: str) -> _Performance:
+        """The performance of request ``ident``: started now unless it is a repeat."""
+        with self._lock:
+            job = self._performances.get(ident)
+            if job is None:
+                job = self._performances[ident] = _Performance(text)
+                finished = [k for k, j in self._performances.items() if j.done.is_set()]
+                for forgotten in finished[: max(0, len(self._performances) - self.MAX_TICKETS)]:
+                    del self._performances[forgotten]
+                threading.Thread(
+                    target=self._perform, args=(job,), name=f"perform-{ident}", daemon=True
+                ).start()
+            elif job.text != text:
+                refused = _Performance(text)
+                refused.refuse(f"request id {ident} was already used for {job.text!r}")
+                return refused
+        return job
+
+    def _perform(self, job: _Performance) -> None:
         try:
-            step = self.step_of(request.string_value)
+            step = self.step_of(job.text)
         except (ValueError, FactError) as exc:
-            response.bool_value = False
-            response.string_value = encode_result(False, [], str(exc))
-            return response
+            job.refuse(str(exc))
+            return
         self._log(f"goal {step}")
         if self.skills is not None:
             outcome, text = self._run_skill(step, Run(), None)
@@ -266,9 +322,7 @@ class SkillServer:
                 ok, observations = self.world.perform(step)
             text = encode_result(ok, observations)
         self._log(f"{'succeeded' if ok else 'failed'} {step}")
-        response.bool_value = ok
-        response.string_value = text
-        return response
+        job.finish(ok, text)
 
     def _on_facts(self, request: Any, response: Any) -> Any:
         response.success = True

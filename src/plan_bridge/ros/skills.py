@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import secrets
+import time
 from typing import Any
 
 import smach
@@ -11,6 +13,8 @@ from plan_bridge.planning.planner import PlanStep
 from plan_bridge.ros.protocol import (
     FACTS_SERVICE,
     INFO_SERVICE,
+    PERFORM_DONE,
+    PERFORM_HOLD,
     PERFORM_SERVICE,
     REPORT_SERVICE,
     SUBMIT_SERVICE,
@@ -45,8 +49,10 @@ def ros_skill(
     :class:`~smach.ros.ServiceState`, a :class:`~smach.ros.SimpleActionState` on
     ``PREFIX/ACTION`` (a preempt cancels the remote goal) and a ServiceState reading
     the outcome and observations (see :mod:`plan_bridge.ros.protocol`).
-    ``transport="service"``: one ServiceState on ``PREFIX/perform`` (a preempt
-    abandons the call; the robot finishes the action).
+    ``transport="service"``: a StateMachine BEGIN -> PERFORM, the ServiceState
+    PERFORM asking ``PREFIX/perform`` about one request id until the action is done
+    (a lost reply is sent again; ``exec_timeout`` and a preempt abandon the call
+    and the robot finishes the action).
     """
     fibonacci, basic_types, _ = interfaces()
     text = str(step)
@@ -65,17 +71,7 @@ def ros_skill(
         return outcome
 
     if transport == "service":
-        request = basic_types.Request()
-        request.string_value = text
-        return ServiceState(
-            node,
-            f"{prefix}/{PERFORM_SERVICE}",
-            basic_types,
-            request=request,
-            response_cb=read_result,
-            server_wait_timeout=server_wait_timeout,
-            call_timeout=exec_timeout,
-        )
+        return _performed_skill(node, text, read_result, prefix, server_wait_timeout, exec_timeout)
     if transport != "action":
         raise ValueError(f"unknown transport {transport!r}; transports: {', '.join(TRANSPORTS)}")
 
@@ -157,6 +153,67 @@ def ros_skill(
                 ),
                 transitions={} if final is None else {"succeeded": final},
             )
+    return sm
+
+
+def _performed_skill(
+    node: Any,
+    text: str,
+    read_result: Any,
+    prefix: str,
+    server_wait_timeout: float,
+    exec_timeout: float | None,
+) -> smach.StateMachine:
+    """The service transport's skill: ``perform`` polled under one request id."""
+    _, basic_types, _ = interfaces()
+    outcomes = ["succeeded", "aborted", "preempted"]
+
+    @smach.cb_interface(output_keys=["request_id", "deadline"], outcomes=["succeeded"])
+    def begin(ud: smach.UserData) -> str:
+        # A fresh id per execution: a retried skill performs the action again.
+        ud.request_id = secrets.randbits(62) + 1
+        ud.deadline = None if exec_timeout is None else time.monotonic() + exec_timeout
+        return "succeeded"
+
+    @smach.cb_interface(input_keys=["request_id"])
+    def ask(ud: smach.UserData, request: Any) -> Any:
+        request = basic_types.Request()
+        request.string_value = text
+        request.int64_value = ud.request_id
+        request.float64_value = PERFORM_HOLD
+        return request
+
+    @smach.cb_interface(input_keys=["deadline"], output_keys=["observations"], outcomes=["running"])
+    def answer(ud: smach.UserData, response: Any) -> str:
+        if response.int64_value == PERFORM_DONE:
+            return str(read_result(ud, response))
+        if ud.deadline is not None and time.monotonic() >= ud.deadline:
+            smach.logerr(
+                f"skill {text}: not done after {exec_timeout} s (exec_timeout); "
+                "the robot finishes it unwatched"
+            )
+            return "aborted"
+        return "running"
+
+    # A reply lost on the way is asked for again after the hold and a grace period.
+    grace = min(server_wait_timeout, 2.0)
+    sm = smach.StateMachine(outcomes=outcomes, output_keys=["observations"])
+    with sm:
+        smach.StateMachine.add("BEGIN", smach.CBState(begin), transitions={"succeeded": "PERFORM"})
+        smach.StateMachine.add(
+            "PERFORM",
+            ServiceState(
+                node,
+                f"{prefix}/{PERFORM_SERVICE}",
+                basic_types,
+                request_cb=ask,
+                response_cb=answer,
+                server_wait_timeout=server_wait_timeout,
+                call_timeout=PERFORM_HOLD + grace,
+                call_attempts=3,
+            ),
+            transitions={"running": "PERFORM"},
+        )
     return sm
 
 
