@@ -19,17 +19,11 @@ from plan_bridge.errors import PlanBridgeError
 from plan_bridge.pddl.task import load_task
 
 ROOT = Path(__file__).resolve().parents[1]
-CORPUS = Path(sys.argv[1]) if len(sys.argv) > 1 else ROOT / "tests/plan_bridge/pddl/corpus"
+sys.path.insert(0, str(ROOT / "tests" / "plan_bridge" / "pddl"))
+from corpus_cases import CORPUS as DEFAULT_CORPUS  # noqa: E402
+from corpus_cases import expectations, pair  # noqa: E402
 
-
-def expectations(path: Path) -> dict[str, str]:
-    found: dict[str, str] = {}
-    for row in path.read_text("utf-8", "replace").lstrip("\ufeff").splitlines():
-        if not row.startswith(";; "):
-            break
-        key, _, value = row[3:].partition(": ")
-        found[key] = value
-    return found
+CORPUS = Path(sys.argv[1]) if len(sys.argv) > 1 else DEFAULT_CORPUS
 
 
 def verdict(domain: Path, problem: Path) -> None:
@@ -51,13 +45,7 @@ def main() -> None:
     started = time.perf_counter()
     for path in sorted(CORPUS.glob("*.pddl")):
         meta = expectations(path)
-        kind = path.name.split("-", 1)[0]
-        other = (
-            CORPUS
-            / "base"
-            / meta.get("pair", "problem.pddl" if kind == "domain" else "domain.pddl")
-        )
-        domain, problem = (path, other) if kind == "domain" else (other, path)
+        domain, problem = pair(path, meta)
         error: PlanBridgeError | None = None
         try:
             verdict(domain, problem)

@@ -24,26 +24,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests" / "plan_bridge" / "pddl"))
+from corpus_cases import CORPUS, expectations, pair  # noqa: E402
+
 CLI = ROOT / ".venv" / "bin" / "plan-bridge"
 COMMANDS = ("check", "plan", "run")
-
-
-def expectations(path: Path) -> dict[str, str]:
-    found: dict[str, str] = {}
-    for row in path.read_text("utf-8", "replace").lstrip("\ufeff").splitlines():
-        if not row.startswith(";; "):
-            break
-        key, _, value = row[3:].partition(": ")
-        found[key] = value
-    return found
-
-
-def pair(corpus: Path, path: Path, meta: dict[str, str]) -> tuple[Path, Path]:
-    kind = path.name.split("-", 1)[0]
-    other = (
-        corpus / "base" / meta.get("pair", "problem.pddl" if kind == "domain" else "domain.pddl")
-    )
-    return (path, other) if kind == "domain" else (other, path)
 
 
 @dataclass(frozen=True)
@@ -93,7 +78,7 @@ def run_command(command: str, domain: Path, problem: Path) -> Outcome:
 
 def judge(corpus: Path, path: Path) -> list[str]:
     meta = expectations(path)
-    domain, problem = pair(corpus, path, meta)
+    domain, problem = pair(path, meta)
     outcomes = {command: run_command(command, domain, problem) for command in COMMANDS}
     problems: list[str] = []
     codes = {command: outcome.code for command, outcome in outcomes.items()}
@@ -136,7 +121,7 @@ def judge(corpus: Path, path: Path) -> list[str]:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("corpus", nargs="?", default=ROOT / "tests/plan_bridge/pddl/corpus")
+    parser.add_argument("corpus", nargs="?", default=CORPUS)
     parser.add_argument("--jobs", type=int, default=2)
     args = parser.parse_args()
     corpus = Path(args.corpus)

@@ -10,6 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from corpus_cases import CORPUS, expectations, pair
 
 from plan_bridge.cli import main
 from plan_bridge.cli.base import check_input
@@ -17,28 +18,9 @@ from plan_bridge.errors import PddlError, UnsupportedFeatureError
 from plan_bridge.pddl.features import is_installed
 from plan_bridge.pddl.task import load_task
 
-CORPUS = Path(__file__).parent / "corpus"
 CASES = sorted(CORPUS.glob("*.pddl"))
 BROKEN = [path for path in CASES if ";; verdict: error" in path.read_text("utf-8", "replace")]
 VALID = [path for path in CASES if path not in BROKEN]
-
-
-def expectations(path: Path) -> dict[str, str]:
-    found: dict[str, str] = {}
-    for row in path.read_text("utf-8", "replace").lstrip("\ufeff").splitlines():
-        if not row.startswith(";; "):
-            break
-        key, _, value = row[3:].partition(": ")
-        found[key] = value
-    return found
-
-
-def pair(path: Path, meta: dict[str, str]) -> tuple[Path, Path]:
-    kind = path.name.split("-", 1)[0]
-    other = (
-        CORPUS / "base" / meta.get("pair", "problem.pddl" if kind == "domain" else "domain.pddl")
-    )
-    return (path, other) if kind == "domain" else (other, path)
 
 
 def engine_missing(meta: dict[str, str]) -> bool:
