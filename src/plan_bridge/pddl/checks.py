@@ -192,12 +192,23 @@ def _formula(ctx: _Context, node: Node, scope: Mapping[str, str], mode: str) -> 
         _unsupported(ctx, head if head != "or" else "oneof", node.offset)
         return
     if (
-        ctx.durative
-        and head in ("at", "over")
+        head in ("at", "over")
         and len(args) == 2
         and isinstance(args[0], Atom)
         and args[0].text in ("start", "end", "all")
+        and isinstance(args[1], Form)
     ):
+        if not ctx.durative:
+            ctx.diags.error(
+                ctx.source,
+                node.offset,
+                f"({head} {args[0].text} ...) is a timed {'effect' if mode == 'eff' else 'condition'}"
+                f", but {ctx.where} is not a :durative-action",
+                "write the formula without it in an :action, or make the action a "
+                "(:durative-action NAME :parameters (...) :duration (= ?duration N) "
+                ":condition ... :effect ...)",
+            )
+            return
         _formula(ctx, args[1], scope, mode)
         return
     if head == "and":

@@ -44,6 +44,14 @@ DEFAULT_MAX_DEPTH = 200
 _TOKEN = re.compile(r";[^\n]*|\(|\)|[^\s();]+")
 
 #: Section keywords of each kind of file (PDDL 1.2 to 3.1, PDDL+ and HTN).
+#: What to write instead of a section that belongs to the other kind of file.
+_MISPLACED_SECTION = {
+    ":constants": "declare the problem's own objects in (:objects ...); "
+    "constants shared by every problem go in the domain's (:constants ...)",
+    ":objects": "declare objects every problem shares in the domain's (:constants ...), "
+    "and the rest in each problem's (:objects ...)",
+}
+
 _SECTIONS = {
     "domain": frozenset(
         [
@@ -443,6 +451,13 @@ def _check_keywords(source: SourceText) -> None:
                 keywords = ()
                 if head.text in {"domain", "problem"} and index == 2:
                     continue
+                other = "problem" if source.kind == "domain" else "domain"
+                if head.text not in allowed_sections and head.text in _SECTIONS[other]:
+                    raise source.error(
+                        f"{head.text} is a {other} section; a {source.kind} file cannot have it",
+                        head.offset,
+                        hint=_MISPLACED_SECTION.get(head.text, f"move it into the {other} file"),
+                    )
                 if head.text not in allowed_sections:
                     raise source.error(
                         f"unknown {source.kind} section {head.text!r}"
