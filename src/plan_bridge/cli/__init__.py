@@ -13,12 +13,16 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import signal
 import sys
-from collections.abc import Sequence
+import threading
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from types import FrameType
 
-from plan_bridge.cli.base import EXIT_INTERNAL, Command
+from plan_bridge.cli.base import EXIT_INTERNAL, Command, Terminated
 
-__all__ = ["MODULES", "build_parser", "commands", "main"]
+__all__ = ["MODULES", "Terminated", "build_parser", "commands", "main"]
 
 #: The subcommand modules, in the order ``plan-bridge --help`` lists their commands.
 MODULES = (
@@ -68,13 +72,35 @@ def build_parser(
     return parser
 
 
+def _terminate(signum: int, frame: FrameType | None) -> None:
+    raise Terminated(f"signal {signum}")
+
+
+@contextmanager
+def _sigterm_as_interrupt() -> Iterator[None]:
+    """Within the block, SIGTERM (``kill``, systemd, a container stop) raises
+    :class:`Terminated` in the main thread instead of killing the process outright."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGTERM, _terminate)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``plan-bridge`` console script."""
     argv = sys.argv[1:] if argv is None else list(argv)
     table = commands()
     args = build_parser(argv, table).parse_args(argv)
     try:
-        return table[args.command].run(args)
+        with _sigterm_as_interrupt():
+            return table[args.command].run(args)
+    except Terminated:
+        print("plan-bridge: terminated", file=sys.stderr)
+        return 128 + signal.SIGTERM
     except KeyboardInterrupt:
         print("plan-bridge: interrupted", file=sys.stderr)
         return 130

@@ -18,6 +18,7 @@ from plan_bridge.cli.base import (
     EXIT_OK,
     Command,
     InputError,
+    Terminated,
     add_input_arguments,
     bounded,
     check_input,
@@ -393,8 +394,12 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
 
             url = enable_controls(viewer, console.controller, actions=console.viewer_actions())
             print(f"control: {url}", file=sys.stderr, flush=True)
+    interrupted: KeyboardInterrupt | None = None
     try:
         outcome = executive.execute()
+    except KeyboardInterrupt as exc:
+        interrupted = exc  # Ctrl-C or SIGTERM: not an end, a resume continues the run
+        raise
     except SmachError as exc:
         # A skill broke its contract (undeclared key, bad outcome, exception): the
         # message names the state path; the mission failed.
@@ -410,7 +415,11 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
             viewer.close()
         report = executive.report
         if journal is not None:
-            journal.write_record("summary", **report.to_json())
+            if interrupted is None:
+                journal.write_record("summary", **report.to_json())
+            else:
+                by = "SIGTERM" if isinstance(interrupted, Terminated) else "SIGINT"
+                journal.write_raw("interrupted", signal=by)
             journal.close()
     faults = getattr(world, "faults_injected", None)
     robot_info = robot.info() if robot is not None else None

@@ -193,3 +193,53 @@ def test_a_resumed_run_keeps_its_time_scale_unless_given_another(
 
     assert resumed_scales() == {0.002}  # from the journal's header
     assert resumed_scales("--time-scale", "0") == {0.0}  # given again: that one
+
+
+@pytest.mark.timeout(300)
+@pytest.mark.parametrize(("sig", "code", "message"), [
+    (signal.SIGTERM, 143, "plan-bridge: terminated"),
+    (signal.SIGINT, 130, "plan-bridge: interrupted"),
+])  # fmt: skip
+def test_a_terminated_or_interrupted_run_closes_its_journal_and_resumes_to_the_goal(
+    tmp_path: Path, sig: signal.Signals, code: int, message: str
+) -> None:
+    journal = tmp_path / "run.jsonl"
+    process = subprocess.Popen(
+        _cli(
+            "run",
+            str(DOMAINS / "fetch_drink"),
+            "--time-scale",
+            "0.05",
+            "--journal",
+            str(journal),
+            "--quiet",
+        ),
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and b'"kind": "checkpoint"' not in (
+        journal.read_bytes() if journal.exists() else b""
+    ):
+        time.sleep(0.01)
+    assert process.poll() is None, "the run ended before its first checkpoint"
+    process.send_signal(sig)
+    _, stderr = process.communicate(timeout=60)
+    assert process.returncode == code, stderr
+    assert stderr.strip().splitlines()[-1] == message  # no traceback
+    _, records = read_journal(journal)
+    # Every line whole, no summary (the run did not end), and a record of why it stopped.
+    assert records[-1] == {"kind": "interrupted", "signal": sig.name}
+    assert all(r["kind"] != "summary" for r in records)
+
+    resumed = subprocess.run(
+        _cli("run", "--resume", str(journal), "--quiet"),
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert resumed.returncode == 0, resumed.stderr
+    _, records = read_journal(journal)
+    assert records[-1]["kind"] == "summary" and records[-1]["goal_reached"] is True
+    assert journal_problems(journal, every=5) == []
