@@ -45,6 +45,7 @@ import hashlib
 import importlib
 import json
 import re
+import threading
 from collections.abc import Iterable
 from typing import Any
 
@@ -61,6 +62,7 @@ __all__ = [
     "PERFORM_SERVICE",
     "REPORT_SERVICE",
     "SUBMIT_SERVICE",
+    "Performance",
     "action_topic",
     "decode_result",
     "encode_result",
@@ -159,3 +161,23 @@ def interfaces() -> tuple[Any, Any, Any]:
     basic_types = importlib.import_module("test_msgs.srv").BasicTypes
     trigger = importlib.import_module("std_srvs.srv").Trigger
     return fibonacci, basic_types, trigger
+
+
+class Performance:
+    """The server's record of one ``perform`` request id: its action text and, once
+    the action ended, its outcome and JSON result (as ``report`` gives it)."""
+
+    def __init__(self, text: str) -> None:
+        self.text = text
+        self.done = threading.Event()
+        self.ok = False
+        self.result = ""
+
+    def finish(self, ok: bool, result: str) -> None:
+        """Record the outcome and the JSON result payload; wakes every waiting request."""
+        self.ok = ok
+        self.result = result
+        self.done.set()
+
+    def refuse(self, reason: str) -> None:
+        self.finish(False, encode_result(False, [], reason))

@@ -34,11 +34,9 @@ import json
 import os
 import signal
 import sys
-import tempfile
 import threading
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from pathlib import Path
 from typing import Any
 
 import smach
@@ -47,6 +45,7 @@ from plan_bridge.execution.simulation import SimulatedWorld
 from plan_bridge.execution.world import normalise_observations
 from plan_bridge.pddl.task import PlanningTask, parse_fact
 from plan_bridge.planning.planner import PlanStep
+from plan_bridge.ros.lease import select_short_lease
 from plan_bridge.ros.pacing import Pacer, Run, pace
 from plan_bridge.ros.protocol import (
     FACTS_SERVICE,
@@ -57,6 +56,7 @@ from plan_bridge.ros.protocol import (
     PERFORM_SERVICE,
     REPORT_SERVICE,
     SUBMIT_SERVICE,
+    Performance,
     action_topic,
     encode_result,
     interfaces,
@@ -74,40 +74,7 @@ from smach.ros._api import (
     rclpy,
 )
 
-__all__ = ["SHORT_LEASE_PROFILE", "SkillServer", "main"]
-
-#: Fast DDS participant profile with a short lease: when the robot process dies
-#: (SIGKILL, crash, power loss), it leaves the ROS graph after ``{lease}`` seconds
-#: instead of Fast DDS's default 20 s, so executives notice within that time.
-SHORT_LEASE_PROFILE = """<?xml version="1.0" encoding="UTF-8" ?>
-<dds xmlns="http://www.eprosima.com"><profiles>
-  <participant profile_name="plan_bridge_robot_lease" is_default_profile="true"><rtps><builtin>
-    <discovery_config>
-      <leaseDuration><sec>{sec}</sec><nanosec>{nanosec}</nanosec></leaseDuration>
-      <leaseAnnouncement><sec>{asec}</sec><nanosec>{ananosec}</nanosec></leaseAnnouncement>
-    </discovery_config>
-  </builtin></rtps></participant>
-</profiles></dds>
-"""
-
-
-class _Performance:
-    """One ``perform`` request: its action text and, once done, its JSON result."""
-
-    def __init__(self, text: str) -> None:
-        self.text = text
-        self.done = threading.Event()
-        self.ok = False
-        self.result = ""
-
-    def finish(self, ok: bool, result: str) -> None:
-        """Record the outcome and the JSON result payload; wakes every waiting request."""
-        self.ok = ok
-        self.result = result
-        self.done.set()
-
-    def refuse(self, reason: str) -> None:
-        self.finish(False, encode_result(False, [], reason))
+__all__ = ["SkillServer", "main"]
 
 
 class SkillServer:
@@ -159,7 +126,7 @@ class SkillServer:
         self._reports: dict[int, str] = {}
         self._next_ticket = 1
         # perform requests by request id (a repeated request joins the first one).
-        self._performances: dict[int, _Performance] = {}
+        self._performances: dict[int, Performance] = {}
         # Goals being executed: goal id -> (run, skill state once built, step).
         self._runs: dict[bytes, tuple[Run, smach.State | None, PlanStep]] = {}
         self._servers: list[Any] = []
@@ -276,7 +243,7 @@ class SkillServer:
     def _on_perform(self, request: Any, response: Any) -> Any:
         ident = int(request.int64_value)
         if ident == 0:  # no request id: perform now and answer when done (not repeatable)
-            job = _Performance(request.string_value)
+            job = Performance(request.string_value)
             self._perform(job)
         else:
             job = self._performance(ident, request.string_value)
@@ -288,12 +255,12 @@ class SkillServer:
         response.string_value = job.result
         return response
 
-    def _performance(self, ident: int, text: str) -> _Performance:
+    def _performance(self, ident: int, text: str) -> Performance:
         """The performance of request ``ident``: started now unless it is a repeat."""
         with self._lock:
             job = self._performances.get(ident)
             if job is None:
-                job = self._performances[ident] = _Performance(text)
+                job = self._performances[ident] = Performance(text)
                 finished = [k for k, j in self._performances.items() if j.done.is_set()]
                 for forgotten in finished[: max(0, len(self._performances) - self.MAX_TICKETS)]:
                     del self._performances[forgotten]
@@ -301,12 +268,12 @@ class SkillServer:
                     target=self._perform, args=(job,), name=f"perform-{ident}", daemon=True
                 ).start()
             elif job.text != text:
-                refused = _Performance(text)
+                refused = Performance(text)
                 refused.refuse(f"request id {ident} was already used for {job.text!r}")
                 return refused
         return job
 
-    def _perform(self, job: _Performance) -> None:
+    def _perform(self, job: Performance) -> None:
         try:
             step = self.step_of(job.text)
         except (ValueError, FactError) as exc:
@@ -493,24 +460,6 @@ class SkillServer:
             self.node.destroy_service(service)
 
 
-def _lease_profile(lease: float) -> Path | None:
-    """Write a short-lease Fast DDS profile and select it (unless one is selected)."""
-    if lease <= 0 or os.environ.get("FASTDDS_DEFAULT_PROFILES_FILE"):
-        return None
-    announce = max(0.1, lease / 4)
-    text = SHORT_LEASE_PROFILE.format(
-        sec=int(lease),
-        nanosec=round((lease % 1) * 1e9),
-        asec=int(announce),
-        ananosec=round((announce % 1) * 1e9),
-    )
-    handle, name = tempfile.mkstemp(prefix="plan_bridge_lease_", suffix=".xml")
-    with os.fdopen(handle, "w") as file:
-        file.write(text)
-    os.environ["FASTDDS_DEFAULT_PROFILES_FILE"] = name
-    return Path(name)
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m plan_bridge.ros.skill_server",
@@ -586,7 +535,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         pacer = Pacer(args.time_scale)
         pace(world, pacer)
 
-    profile = _lease_profile(args.lease)
+    profile = select_short_lease(args.lease)
     parent = os.getppid()
     rclpy.init()
     node = rclpy.create_node(args.node_name)
