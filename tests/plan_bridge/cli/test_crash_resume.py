@@ -55,6 +55,17 @@ def _kill_after_lines(journal: Path, lines: int, seed: int) -> bool:
     return process.returncode == -signal.SIGKILL
 
 
+def _resume_to_the_end(journal: Path) -> None:
+    """``plan-bridge run --resume JOURNAL`` in a process of its own; it must succeed."""
+    result = subprocess.run(
+        _cli("run", "--resume", str(journal), "--quiet"),
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert result.returncode == 0, result.stderr
+
+
 @pytest.mark.timeout(600)
 @pytest.mark.parametrize("lines", [2, 6, 12, 20, 30, 45, 60])
 def test_a_run_killed_at_any_point_resumes_to_the_goal_without_redoing_finished_steps(
@@ -68,13 +79,7 @@ def test_a_run_killed_at_any_point_resumes_to_the_goal_without_redoing_finished_
     done_before = len(checkpoints[-1]["state"]["report"]["executed"]) if checkpoints else 0
     first_after = checkpoints[-1]["state"]["first_index"] if checkpoints else 1
 
-    result = subprocess.run(
-        _cli("run", "--resume", str(journal), "--quiet"),
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
-    assert result.returncode == 0, result.stderr
+    _resume_to_the_end(journal)
 
     header_after, records = read_journal(journal)
     assert header_after == header  # one journal, appended to
@@ -233,13 +238,7 @@ def test_a_terminated_or_interrupted_run_closes_its_journal_and_resumes_to_the_g
     assert records[-1] == {"kind": "interrupted", "signal": sig.name}
     assert all(r["kind"] != "summary" for r in records)
 
-    resumed = subprocess.run(
-        _cli("run", "--resume", str(journal), "--quiet"),
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
-    assert resumed.returncode == 0, resumed.stderr
+    _resume_to_the_end(journal)
     _, records = read_journal(journal)
     assert records[-1]["kind"] == "summary" and records[-1]["goal_reached"] is True
     assert journal_problems(journal, every=5) == []
