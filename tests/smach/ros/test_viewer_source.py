@@ -108,7 +108,10 @@ def test_viewer_follows_a_remote_executive(ros: Any) -> None:
             assert set(re.findall(r'data-path="([^"]+)"', svg)) >= EXPECTED
             assert get_json(viewer, "/api/info")["live"] is True
 
-            # The active states follow execution, through every active branch.
+            # The active states follow execution, through every active branch. The
+            # viewer has read the source once before the run starts (on a loaded machine
+            # its first read could come after, and then rightly be a resync).
+            assert wait_for(lambda: viewer.pump_busy_s > 0, 10)
             thread.start()
             assert wait_for(lambda: {"/SM_ROOT/SUB", "/SM_ROOT/SUB/WAIT"} <= active(viewer), 10)
             assert wait_for(
