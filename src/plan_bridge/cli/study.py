@@ -161,6 +161,15 @@ def _run_command(args: argparse.Namespace) -> int:
         )
     except (PlanBridgeError, ValueError) as exc:
         return fail(str(exc))
+    except KeyboardInterrupt:  # Ctrl-C or SIGTERM: the rows written so far are kept
+        kept = len(read_results(out / "results.csv"))
+        print(
+            f"\nplan-bridge study: stopped with {kept} of {total_runs} runs in "
+            f"{out}/results.csv; the same command with --resume runs the rest",
+            file=sys.stderr,
+            flush=True,
+        )
+        raise
     authoring: list[dict[str, Any]] = []
     fault_models: dict[str, dict[str, float]] = {}
     for target in args.targets:

@@ -6,6 +6,7 @@ import csv
 import os
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -75,3 +76,31 @@ def test_a_local_study_never_imports_dask(tmp_path: Path) -> None:
     assert done.returncode == 0, done.stderr[-2000:]
     assert "LOADED []" in done.stdout
     assert (tmp_path / "report.md").exists()
+
+
+@pytest.mark.timeout(300)
+def test_a_terminated_study_keeps_its_rows_and_says_how_to_continue(tmp_path: Path) -> None:
+    out = tmp_path / "study"
+    args = [ROOMS, "--runs", "30", "--fault-rates", "0,0.5", "--approaches", "planned"]
+    command = [sys.executable, "-m", "plan_bridge", "study", *args, "--out", str(out)]
+    process = subprocess.Popen(
+        [*command, "--jobs", "1"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True
+    )
+    results = out / "results.csv"
+    while process.poll() is None and (not results.exists() or results.read_text().count("\n") < 3):
+        time.sleep(0.01)
+    process.terminate()
+    _, err = process.communicate(timeout=60)
+    assert process.returncode == 143, err
+    lines = err.strip().splitlines()
+    assert lines[-1] == "plan-bridge: terminated"
+    assert "the same command with --resume runs the rest" in lines[-2]
+    with results.open() as f:
+        kept = len(list(csv.DictReader(f)))
+    assert f"stopped with {kept} of 60 runs" in lines[-2]
+
+    resumed = subprocess.run([*command, "--resume"], capture_output=True, text=True, timeout=240)
+    assert resumed.returncode == 0, resumed.stderr
+    with results.open() as f:
+        keys = [(r["fault_rate"], r["seed"]) for r in csv.DictReader(f)]
+    assert len(keys) == len(set(keys)) == 60
