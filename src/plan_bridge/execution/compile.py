@@ -182,6 +182,10 @@ class CompiledPlan:
     labels: list[str]
     step_states: list[StepState]
     layers: list[list[int]] = field(default_factory=list)
+    settled_facts: Callable[[], frozenset[Fact]] | None = None
+    """What a checkpoint keeps of the belief while steps are in progress (temporal
+    plans: :meth:`~plan_bridge.execution.temporal.TemporalDispatch.settled_facts`);
+    None: the belief as it is (a sequential step changes it only when it ends)."""
 
 
 def compile_plan(

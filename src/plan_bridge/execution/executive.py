@@ -26,7 +26,7 @@ from plan_bridge.execution.repair import Recovery
 from plan_bridge.execution.replanner import MissionEnded, Replanner
 from plan_bridge.execution.semantics import ActionModel
 from plan_bridge.execution.world import Observation, WorldState, normalise_observations
-from plan_bridge.pddl.task import PlanningTask, format_fact, parse_fact
+from plan_bridge.pddl.task import Fact, PlanningTask, format_fact, parse_fact
 from plan_bridge.planning.planner import Planner, PlanResult, PlanStep, get_planner
 from plan_bridge.skills.registry import SkillRegistry
 from smach.introspection.events import stamp
@@ -323,7 +323,7 @@ class Executive(smach.Container):
         snapshot = {
             "plan": remaining,
             "first_index": max(done, default=first - 1) + 1,
-            "belief": sorted(format_fact(f) for f in self.belief.facts),
+            "belief": sorted(format_fact(f) for f in self._settled_facts()),
             "report": self.report.to_json(),
             "userdata": _json_values(self.userdata),
         }
@@ -338,6 +338,12 @@ class Executive(smach.Container):
         if values:
             snapshot["values"] = sorted([format_fact(f), v] for f, v in values.items())
         return snapshot
+
+    def _settled_facts(self) -> frozenset[Fact]:
+        compiled = self._compiled
+        if compiled is not None and compiled.settled_facts is not None:
+            return compiled.settled_facts()
+        return frozenset(self.belief.facts)
 
     def resume_from(self, snapshot: dict[str, Any]) -> None:
         """Make the next :meth:`execute` continue from a :meth:`snapshot` (no initial plan)."""

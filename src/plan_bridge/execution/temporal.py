@@ -340,6 +340,10 @@ class TimedStepState(StepState):
         #: dispatch shares one between its steps): two steps increasing the same
         #: number at once must not both add to the old value.
         self.effects_lock = threading.Lock()
+        #: While the step is in progress (its at-start effects in the belief, its at-end
+        #: ones not yet): (facts its start removed, facts its start added), what undoing
+        #: it would restore; None otherwise. Read and written under ``effects_lock``.
+        self.in_flight: tuple[frozenset[Fact], frozenset[Fact]] | None = None
         self._violation: list[str] = []
 
     def add(
@@ -366,15 +370,32 @@ class TimedStepState(StepState):
         self._violation = []
         started = time.monotonic()
         ground = self.ground
+        unmet: tuple[str, ...] = ()
         with self.effects_lock:
             with self.belief.locked() as facts:
                 if self.check_preconditions and not ground.applicable(facts):
-                    record.outcome = "invalid"
-                    record.unmet = tuple(ground.unmet_preconditions(facts))
-                    return self._finish(record, started)
-                adds, dels, values = ground.start_effects(facts)
-            self.belief.apply(adds, dels)
-            self.belief.set_values(values)
+                    unmet = tuple(ground.unmet_preconditions(facts))
+                else:
+                    adds, dels, values = ground.start_effects(facts)
+                    removed = frozenset(f for f in dels if f in facts and f not in adds)
+                    added = frozenset(f for f in adds if f not in facts)
+            if not unmet:
+                self.belief.apply(adds, dels)
+                self.belief.set_values(values)
+                self.in_flight = (removed, added)
+        if unmet:  # (outside the lock: finishing may write a checkpoint, which takes it)
+            record.outcome = "invalid"
+            record.unmet = unmet
+            return self._finish(record, started)
+        try:
+            return self._run_started(child, label, record, started)
+        finally:
+            self.in_flight = None
+
+    def _run_started(
+        self, child: smach.State, label: str, record: StepRecord, started: float
+    ) -> str:
+        ground = self.ground
         self._started()
         data = self._userdata._data
         data["action"] = ground.name
@@ -416,6 +437,7 @@ class TimedStepState(StepState):
                 if not unmet:
                     self.belief.apply(end[0], end[1])
                     self.belief.set_values(end[2])
+                    self.in_flight = None  # with its end effects, atomically
             if unmet:
                 outcome = "aborted"
                 record.unmet = ("at end: " + ", ".join(unmet),)
@@ -562,6 +584,24 @@ class TemporalDispatch(smach.Container):
         self._remappers: dict[str, smach.Remapper] = {}
         self._run_state: _Dispatch | None = None
         self._wake = threading.Condition()
+
+    def settled_facts(self) -> frozenset[Fact]:
+        """The belief's facts with the at-start changes of the steps in progress undone.
+
+        What a checkpoint keeps: were the process to stop now, those steps would be
+        abandoned (a robot stopped mid-drive is back where it began, as after a
+        preempt) and run again from their start after a resume; numbers they spent
+        stay spent. The belief itself, mid-step, can be a state no plan starts from
+        (the courier at no place while it drives).
+        """
+        with self._effects_lock:
+            facts = set(self.belief.facts)
+            for state in self._states.values():
+                if state.in_flight is not None:
+                    removed, added = state.in_flight
+                    facts.difference_update(added)
+                    facts.update(removed)
+        return frozenset(facts)
 
     # -- Container interface -------------------------------------------------------------
     def get_children(self) -> dict[str, smach.State]:
@@ -822,4 +862,11 @@ def compile_temporal(
     dispatch = TemporalDispatch(
         steps, states, labels, model, belief, time_scale=time_scale, on_failure=on_failure
     )
-    return CompiledPlan(dispatch, steps, labels, list(states), [[i] for i in range(len(steps))])
+    return CompiledPlan(
+        dispatch,
+        steps,
+        labels,
+        list(states),
+        [[i] for i in range(len(steps))],
+        settled_facts=dispatch.settled_facts,
+    )

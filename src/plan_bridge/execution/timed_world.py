@@ -123,6 +123,18 @@ class TimedWorld(SimulatedWorld):
             if undo is not None:
                 self._apply(undo[0], undo[1], {})
 
+    def abandon_running(self) -> None:
+        """Every step begun and not ended is abandoned, as by :meth:`abandon`.
+
+        For a world restored from a checkpoint taken while steps were in progress: the
+        process that ran them is gone, so they stopped where they were (a drive is back
+        where it began) and a resumed run starts them again.
+        """
+        with self._lock:
+            for removed, added in self._undo.values():
+                self._apply(removed, added, {})
+            self._undo.clear()
+
     def finish(self, step: PlanStep, faults: set[str]) -> bool:
         """End ``step`` (its over-all and at-end conditions, at-end effects)."""
         ground = self.model.ground(step)

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 import smach
-from plan_bridge.execution.compile import compile_plan
+from plan_bridge.execution.compile import CompiledPlan, StepRecord, compile_plan
 from plan_bridge.execution.semantics import ActionModel
 from plan_bridge.execution.temporal import (
     ActionEnded,
@@ -263,3 +263,26 @@ def test_a_step_planned_during_another_waits_until_that_one_has_begun(
     assert outcome == "succeeded"
     # The inspection began only once the holder said its action had begun.
     assert times["inspect"] >= times["light begun"]
+
+
+def test_what_a_checkpoint_keeps_of_the_belief_leaves_out_steps_in_progress(
+    task: PlanningTask,
+) -> None:
+    model = ActionModel(task)
+    belief = WorldState(task.initial_facts, model.initial_values())
+    seen: list[tuple[frozenset[object], frozenset[object]]] = []
+    compiled: list[CompiledPlan] = []
+
+    def finished(record: StepRecord) -> None:
+        if record.step.action == "undock":  # while the light is still being held
+            seen.append((compiled[0].settled_facts(), frozenset(belief.facts)))
+
+    compiled.append(
+        compile_plan(PLAN[:2], skills_with(hold_light=0.3), model, belief, on_finished=finished)
+    )
+    assert compiled[0].machine.execute() == "succeeded"
+    ((kept, live),) = seen
+    light, docked = ("light-on", "yard"), ("docked", "scout")
+    assert light in live and light not in kept  # hold-light's start is undone in the checkpoint
+    assert docked not in live and docked not in kept  # undock ended: its effects are kept
+    assert compiled[0].settled_facts() == frozenset(belief.facts)  # nothing in progress any more

@@ -59,6 +59,18 @@ def test_every_checkpoint_of_a_temporal_plan_has_the_steps_left_times_and_the_nu
         assert "(charge-level courier)" in _values(state)
 
 
+def test_every_checkpoint_has_each_robot_somewhere_even_while_it_drives(journal: Path) -> None:
+    # A drive removes (at robot from) at its start and adds (at robot to) at its end; a
+    # checkpoint written by another step meanwhile keeps the robot where it began (a
+    # belief with the robot at no place is a state no planner can start from).
+    _, records = read_journal(journal)
+    for n, checkpoint in enumerate(read_states(records, "checkpoint")):
+        places = [
+            fact.split()[1] for fact in checkpoint["state"]["belief"] if fact.startswith("(at ")
+        ]
+        assert sorted(places) == ["courier", "helper"], (n, places)
+
+
 def test_a_run_resumed_after_a_checkpoint_keeps_the_timeline_and_the_numeric_belief(
     journal: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -42,3 +42,17 @@ def test_a_step_begun_again_draws_its_next_faults_and_a_restored_world_continues
         assert restored.begin(HOLD)[1] == again  # the second attempt, as before the save
         draws.append((faults, again))
     assert any(first != second for first, second in draws)  # attempts draw anew
+
+
+def test_a_world_restored_mid_step_abandons_the_step_and_can_begin_it_again() -> None:
+    one = world(0)
+    before = one.facts
+    started, _ = one.begin(DRIVE)
+    assert started and ("at", "courier", "depot") not in one.facts  # driving: at no place
+    saved = json.loads(json.dumps(one.snapshot()))
+    restored = world(0)
+    restored.restore(saved)
+    assert restored.facts == one.facts  # restore is exact, the drive still in progress
+    restored.abandon_running()  # the process that drove is gone: the drive stopped
+    assert restored.facts == before
+    assert restored.begin(DRIVE)[0]  # and a resumed run can drive again
