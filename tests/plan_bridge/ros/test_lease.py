@@ -13,10 +13,18 @@ VARIABLE = "FASTDDS_DEFAULT_PROFILES_FILE"
 NS = {"dds": "http://www.eprosima.com"}
 
 
+def _unset(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Unset the variable so that the test's end restores it as it was, whatever the
+    code under test sets (a ``delenv`` of an unset variable records nothing to undo,
+    and a path to a removed profile would then break the DDS of every later test)."""
+    monkeypatch.setenv(VARIABLE, "")
+    monkeypatch.delenv(VARIABLE)
+
+
 def test_a_lease_writes_a_profile_with_that_lease_and_selects_it(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    monkeypatch.delenv(VARIABLE, raising=False)
+    _unset(monkeypatch)
     profile = select_short_lease(2.5)
     assert profile is not None
     try:
@@ -42,7 +50,7 @@ def test_a_lease_writes_a_profile_with_that_lease_and_selects_it(
 def test_no_lease_or_a_profile_already_chosen_is_left_alone(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    monkeypatch.delenv(VARIABLE, raising=False)
+    _unset(monkeypatch)
     assert select_short_lease(0) is None
     monkeypatch.setenv(VARIABLE, "/etc/their_profile.xml")
     assert select_short_lease(2.0) is None
