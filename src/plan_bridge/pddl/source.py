@@ -43,7 +43,6 @@ DEFAULT_MAX_DEPTH = 200
 
 _TOKEN = re.compile(r";[^\n]*|\(|\)|[^\s();]+")
 
-#: Section keywords of each kind of file (PDDL 1.2 to 3.1, PDDL+ and HTN).
 #: What to write instead of a section that belongs to the other kind of file.
 _MISPLACED_SECTION = {
     ":constants": "declare the problem's own objects in (:objects ...); "
@@ -52,6 +51,7 @@ _MISPLACED_SECTION = {
     "and the rest in each problem's (:objects ...)",
 }
 
+#: Section keywords of each kind of file (PDDL 1.2 to 3.1, PDDL+ and HTN).
 _SECTIONS = {
     "domain": frozenset(
         [
