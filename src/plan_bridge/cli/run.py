@@ -108,7 +108,10 @@ def _configure_run(parser: argparse.ArgumentParser) -> None:
         "robot started here (default 0.01)",
     )
     parser.add_argument(
-        "-v", "--verbose", action="store_true", help="also print the states each step enters"
+        "-v",
+        "--verbose",
+        action="store_true",
+        help="also print the states each step enters (with --ros: the robot's own lines)",
     )
     control = parser.add_argument_group("runtime control", "see docs/control.md")
     control.add_argument(
@@ -240,6 +243,7 @@ def _connect_robot(
         fail_rate=fail_rate,
         time_scale=0.01 if args.time_scale is None else args.time_scale,
         log=None if args.quiet else sys.stderr,
+        echo_robot=args.verbose,  # the robot's goals and skill states: with -v only
     )
     resources.callback(robot.close)
     return robot.open()

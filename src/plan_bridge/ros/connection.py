@@ -56,7 +56,8 @@ class RobotConnection:
     ``target`` (a :class:`~plan_bridge.missions.mission.Target`) with ``seed``,
     ``fail_rate`` and ``time_scale``, and stop it in :meth:`close`. Otherwise
     connect to the robot node already serving under ``prefix``. ``log`` receives
-    what happens (and the robot's own lines, prefixed ``[robot]``).
+    what happens, and with ``echo_robot`` the robot's own lines, prefixed
+    ``[robot]`` (the goals and the states of its skills).
     """
 
     #: Seconds to wait for a robot we started to print ``ready``.
@@ -76,8 +77,10 @@ class RobotConnection:
         wait_timeout: float = 20.0,
         server_wait_timeout: float = 10.0,
         log: TextIO | None = None,
+        echo_robot: bool = True,
     ) -> None:
         self.target = target
+        self.echo_robot = echo_robot
         self.start_robot = start_robot
         self.prefix = prefix or (f"robot_{os.getpid()}" if start_robot else "robot")
         self.seed = seed
@@ -204,7 +207,7 @@ class RobotConnection:
             self.lines.append(line)
             if line == "ready":
                 self._ready.set()
-            elif self.log is not None:
+            elif self.echo_robot:
                 self._say(f"  [robot] {line}")
         code = process.wait()
         if self.context is not None:  # not stopped by close()

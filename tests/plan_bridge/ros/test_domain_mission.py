@@ -248,6 +248,8 @@ def test_plan_bridge_run_ros_json_exits_0(tmp_path: Path) -> None:
     assert data["ros"]["robot_info"]["goal_reached"]
     assert data["faults_injected"] >= 1
     assert "ros: robot node" in result.stderr and "(started here, pid" in result.stderr
+    # One line per step, as without --ros; the robot's own lines only with -v.
+    assert "step 1: (navigate" in result.stderr and "[robot]" not in result.stderr
     # The robot process it started is gone.
     pid = data["ros"]["robot_info"]["pid"]
     assert wait_for(lambda: not Path(f"/proc/{pid}").exists(), 5)
@@ -256,3 +258,18 @@ def test_plan_bridge_run_ros_json_exits_0(tmp_path: Path) -> None:
     checkpoints = read_states(records, "checkpoint")
     assert checkpoints and all("world" in r and r["world"] is None for r in checkpoints)
     print(f"\nplan-bridge run --ros --json: {elapsed:.2f} s")
+
+
+@pytest.mark.timeout(120)
+def test_plan_bridge_run_ros_verbose_adds_the_robot_lines() -> None:
+    result = subprocess.run(
+        [sys.executable, "-m", "plan_bridge", "run", str(FETCH), "--ros", "-v",
+         "--fail-rate", "0"],
+        capture_output=True, text=True, cwd=ROOT, env=dict(os.environ), timeout=100,
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    lines = result.stderr.splitlines()
+    goal = lines.index("  [robot] goal (navigate pr2 living-room dining-room)")
+    step = next(i for i, line in enumerate(lines) if line.startswith("  step 1: (navigate"))
+    assert goal < step  # the robot's lines come between the executive's steps
+    assert any(line.startswith("  [robot]   state /navigate/") for line in lines[goal:step])
