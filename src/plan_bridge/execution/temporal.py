@@ -334,6 +334,10 @@ class TimedStepState(StepState):
         self.before_end: Callable[[], None] | None = None
         #: Called once at the step's start point (see :data:`BEGUN_KEY`).
         self.on_begun: Callable[[], None] | None = None
+        #: Called with the outcome when the step fails, before what it observed
+        #: reaches the belief: no step is started on the strength of those
+        #: observations after the failure that stops new starts.
+        self.on_failed: Callable[[str], None] | None = None
         self._begun_once = threading.Lock()
         self._has_begun = False
         #: Held from reading the belief to applying the effects computed from it (the
@@ -441,6 +445,8 @@ class TimedStepState(StepState):
             if unmet:
                 outcome = "aborted"
                 record.unmet = ("at end: " + ", ".join(unmet),)
+        if outcome != "succeeded" and self.on_failed is not None:
+            self.on_failed(outcome)
         changed = self.belief.observe(observations)
         record.observations_changed = tuple(
             describe_observation(fact, truth) for fact, truth in changed
@@ -683,6 +689,7 @@ class TemporalDispatch(smach.Container):
             state.time_scale = self.time_scale
             state.before_end = lambda i=index: self._await_end(run, i)
             state.on_begun = lambda i=index: self._begun(run, i)
+            state.on_failed = lambda outcome, i=index: self._failed(run, i, outcome)
         self._run_state = run
         self.belief.add_listener(self._poke)
         try:
@@ -816,11 +823,20 @@ class TemporalDispatch(smach.Container):
             run.ended[j] = time.monotonic()
             run.started.setdefault(j, run.ended[j])  # a step that ended before it began
             run.outcomes[j] = outcome
-            if outcome != "succeeded" and run.failure is None and not run.errors:
+            if outcome != "succeeded":
+                self._failed(run, j, outcome)
+            self._wake.notify_all()
+
+    def _failed(self, run: _Dispatch, j: int, outcome: str) -> None:
+        """Step ``j`` failed with ``outcome``: the first failure stops new starts (and,
+        with ``on_failure="preempt"``, preempts the other steps still running)."""
+        with self._wake:
+            if run.failure is None and not run.errors:
                 run.failure = outcome
                 if self.on_failure == "preempt":
                     for other in run.running:
-                        self._states[self.labels[other]].request_preempt()
+                        if other != j:
+                            self._states[self.labels[other]].request_preempt()
             self._wake.notify_all()
 
     def request_preempt(self) -> None:

@@ -19,7 +19,7 @@ from plan_bridge.execution.temporal import (
     precedence,
 )
 from plan_bridge.execution.world import WorldState
-from plan_bridge.pddl.task import PlanningTask, load_task
+from plan_bridge.pddl.task import PlanningTask, load_task, load_task_from_text
 from plan_bridge.planning.planner import PlanStep
 from plan_bridge.skills.registry import SkillRegistry
 
@@ -286,3 +286,44 @@ def test_what_a_checkpoint_keeps_of_the_belief_leaves_out_steps_in_progress(
     assert light in live and light not in kept  # hold-light's start is undone in the checkpoint
     assert docked not in live and docked not in kept  # undock ended: its effects are kept
     assert compiled[0].settled_facts() == frozenset(belief.facts)  # nothing in progress any more
+
+
+PROBE_DOMAIN = """(define (domain probing)
+  (:requirements :strips :typing :durative-actions)
+  (:types bot)
+  (:predicates (idle ?b - bot) (ready ?b - bot) (probed ?b - bot) (done ?b - bot))
+  (:durative-action probe :parameters (?b - bot) :duration (= ?duration 1)
+    :condition (at start (idle ?b)) :effect (at end (probed ?b)))
+  (:durative-action follow :parameters (?b - bot) :duration (= ?duration 1)
+    :condition (at start (ready ?b)) :effect (at end (done ?b))))"""
+PROBE_PROBLEM = """(define (problem once) (:domain probing) (:objects r - bot)
+  (:init (idle r)) (:goal (and (probed r) (done r))))"""
+
+
+class FailsSeeing(smach.State):
+    """Fails, reporting that ``(ready r)`` holds (which ``follow`` waits for)."""
+
+    def __init__(self, *args: str) -> None:
+        super().__init__(["succeeded", "aborted", "preempted"], output_keys=["observations"])
+
+    def execute(self, ud: smach.UserData) -> str:
+        ud.observations = [(("ready", "r"), True)]
+        return "aborted"
+
+
+def test_a_step_is_not_started_on_what_a_failed_step_observed() -> None:
+    # follow waits for (ready r), which only probe's failure reveals; the failure stops
+    # new starts before its observations reach the belief, every time.
+    task = load_task_from_text(PROBE_DOMAIN, PROBE_PROBLEM)
+    plan = [PlanStep("probe", ("r",), 0.0, 1.0), PlanStep("follow", ("r",), 0.5, 1.0)]
+    started: list[float] = []
+    skills = SkillRegistry()
+    skills.add("probe", FailsSeeing)
+    skills.add("follow", lambda *args: Sleep(0.0, seen=started))
+    for _ in range(5):
+        # A slow finish (a checkpoint, say) leaves the dispatcher time to act on the
+        # observations before the failing step's thread has ended.
+        outcome, _, belief, _ = run(task, skills, plan, on_finished=lambda r: time.sleep(0.05))
+        assert outcome == "aborted"
+        assert ("ready", "r") in belief.facts  # the observation was kept
+    assert started == []  # but follow never started
