@@ -341,8 +341,7 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
     if checkpoint is not None:
         if checkpoint.get("world") is not None and hasattr(world, "restore"):
             world.restore(checkpoint["world"])
-            if hasattr(world, "abandon_running"):  # steps in progress stopped with the process
-                world.abandon_running()
+            world.abandon_running()  # steps in progress stopped with the process
         executive.resume_from(checkpoint["state"])
     out = sys.stderr
     if not args.quiet:

@@ -187,6 +187,11 @@ class SimulatedWorld:
             for name, value in values.items():
                 object.__setattr__(self, name, value)  # no pacing: nothing happens
 
+    def abandon_running(self) -> None:
+        """Abandon the actions in progress (after :meth:`restore` into a new process,
+        whose predecessor ran them). An action here happens at once, so none is ever
+        in progress; a world with durative actions undoes their start."""
+
     def goal_reached(self) -> bool:
         """Whether the task's goal holds in the true world."""
         return self.model.goal_holds(self.facts)

@@ -374,27 +374,27 @@ class TimedStepState(StepState):
         self._violation = []
         started = time.monotonic()
         ground = self.ground
-        unmet: tuple[str, ...] = ()
         with self.effects_lock:
             with self.belief.locked() as facts:
-                if self.check_preconditions and not ground.applicable(facts):
-                    unmet = tuple(ground.unmet_preconditions(facts))
-                else:
+                startable = not self.check_preconditions or ground.applicable(facts)
+                if startable:
                     adds, dels, values = ground.start_effects(facts)
                     removed = frozenset(f for f in dels if f in facts and f not in adds)
                     added = frozenset(f for f in adds if f not in facts)
-            if not unmet:
+                else:
+                    record.unmet = tuple(ground.unmet_preconditions(facts))
+            if startable:
                 self.belief.apply(adds, dels)
                 self.belief.set_values(values)
                 self.in_flight = (removed, added)
-        if unmet:  # (outside the lock: finishing may write a checkpoint, which takes it)
+        if not startable:  # (outside the lock: finishing may write a checkpoint, which takes it)
             record.outcome = "invalid"
-            record.unmet = unmet
             return self._finish(record, started)
         try:
             return self._run_started(child, label, record, started)
         finally:
-            self.in_flight = None
+            with self.effects_lock:  # a failed step: its observations are in the belief
+                self.in_flight = None
 
     def _run_started(
         self, child: smach.State, label: str, record: StepRecord, started: float

@@ -116,12 +116,16 @@ class TimedWorld(SimulatedWorld):
             self._undo[str(step)] = (set(dels - adds), set(adds - dels))
         return True, faults
 
+    def _take_back(self, key: str) -> None:
+        """Undo the at-start changes of facts of the step ``key`` (lock held)."""
+        undo = self._undo.pop(key, None)
+        if undo is not None:
+            self._apply(undo[0], undo[1], {})
+
     def abandon(self, step: PlanStep) -> None:
         """``step`` stopped before its end: undo its at-start changes of facts."""
         with self._lock:
-            undo = self._undo.pop(str(step), None)
-            if undo is not None:
-                self._apply(undo[0], undo[1], {})
+            self._take_back(str(step))
 
     def abandon_running(self) -> None:
         """Every step begun and not ended is abandoned, as by :meth:`abandon`.
@@ -131,20 +135,18 @@ class TimedWorld(SimulatedWorld):
         where it began) and a resumed run starts them again.
         """
         with self._lock:
-            for removed, added in self._undo.values():
-                self._apply(removed, added, {})
-            self._undo.clear()
+            for key in list(self._undo):
+                self._take_back(key)
 
     def finish(self, step: PlanStep, faults: set[str]) -> bool:
         """End ``step`` (its over-all and at-end conditions, at-end effects)."""
         ground = self.model.ground(step)
         with self._lock:
             state = self.state_now()
-            undo = self._undo.pop(str(step), None)
             if "halfway" in faults or ground.unmet_invariant(state) or ground.unmet_at_end(state):
-                if undo is not None:
-                    self._apply(undo[0], undo[1], {})
+                self._take_back(str(step))
                 return False
+            self._undo.pop(str(step), None)
             adds, dels, values = ground.end_effects(state)
             if "drift" in faults:
                 before = values_of(state)

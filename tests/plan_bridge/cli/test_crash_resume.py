@@ -9,6 +9,7 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -45,14 +46,23 @@ def _kill_after_lines(journal: Path, lines: int, seed: int) -> bool:
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
     )
-    deadline = time.monotonic() + 60
-    while process.poll() is None and time.monotonic() < deadline:
-        if journal.exists() and journal.read_bytes().count(b"\n") >= lines:
-            os.kill(process.pid, signal.SIGKILL)
-            break
-        time.sleep(0.002)
+    if _journal_shows(process, journal, lambda data: data.count(b"\n") >= lines):
+        os.kill(process.pid, signal.SIGKILL)
     process.wait(30)
     return process.returncode == -signal.SIGKILL
+
+
+def _journal_shows(
+    process: subprocess.Popen[Any], journal: Path, seen: Callable[[bytes], bool]
+) -> bool:
+    """Wait until ``seen(journal bytes)`` while ``process`` runs (60 s at most);
+    False if the process ended first."""
+    deadline = time.monotonic() + 60
+    while process.poll() is None and time.monotonic() < deadline:
+        if journal.exists() and seen(journal.read_bytes()):
+            return True
+        time.sleep(0.002)
+    return False
 
 
 def _resume_to_the_end(journal: Path) -> None:
@@ -223,12 +233,9 @@ def test_a_terminated_or_interrupted_run_closes_its_journal_and_resumes_to_the_g
         stderr=subprocess.PIPE,
         text=True,
     )
-    deadline = time.monotonic() + 60
-    while time.monotonic() < deadline and b'"kind": "checkpoint"' not in (
-        journal.read_bytes() if journal.exists() else b""
-    ):
-        time.sleep(0.01)
-    assert process.poll() is None, "the run ended before its first checkpoint"
+    assert _journal_shows(process, journal, lambda data: b'"kind": "checkpoint"' in data), (
+        "the run ended before its first checkpoint"
+    )
     process.send_signal(sig)
     _, stderr = process.communicate(timeout=60)
     assert process.returncode == code, stderr
