@@ -212,7 +212,7 @@ def pass_door_skill(
 
 def build_skills(world: DoorWorld) -> SkillRegistry:
     """The registry binding every action of domain.pddl to its machine."""
-    skills = SkillRegistry()
+    skills = SkillRegistry(simulated=True)
     skills.add("move", lambda r, a, b: move_skill(world, r, a, b))
     skills.add(
         "open-door",

@@ -391,7 +391,7 @@ def hand_over_machine(
 
 def build_skills(world: FetchDrinkWorld) -> SkillRegistry:
     """The registry binding every action of domain.pddl to its machine."""
-    skills = SkillRegistry()
+    skills = SkillRegistry(simulated=True)
     skills.add("navigate", lambda r, a, b: navigate_machine(world, r, a, b))
     skills.add("open-fridge", lambda r, f, p: open_fridge_machine(world, r, f))
     skills.add("pick-drink", lambda r, d, s, f, p: pick_machine(world, r, d, s, f))

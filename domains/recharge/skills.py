@@ -399,7 +399,7 @@ def unplug_skill(world: RechargeWorld, robot: str) -> smach.StateMachine:
 
 def build_skills(world: RechargeWorld) -> SkillRegistry:
     """The registry binding every action of domain.pddl to its machine."""
-    skills = SkillRegistry()
+    skills = SkillRegistry(simulated=True)
     skills.add("move", lambda r, a, b: move_skill(world, r, a, b))
     skills.add("go-to-charger", lambda r, a, dock: go_to_charger_skill(world, r, dock))
     skills.add("pick", lambda r, i, x: pick_skill(world, r, i, x))

@@ -482,7 +482,7 @@ def move_machine(world: TableWorld, bind: Mapping[str, Any] | None = None) -> sm
 # -- the registry ----------------------------------------------------------------------------
 def build_skills(world: TableWorld) -> SkillRegistry:
     """One skill per PDDL action, bound to ``world``."""
-    skills = SkillRegistry()
+    skills = SkillRegistry(simulated=True)
 
     @skills.register("move")
     def move(robot: str, source: str, target: str) -> smach.State:

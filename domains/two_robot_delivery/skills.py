@@ -249,7 +249,7 @@ def drop_machine(world: DeliveryWorld, bind: Mapping[str, Any] | None = None) ->
 # -- the registry ----------------------------------------------------------------------------
 def build_skills(world: DeliveryWorld) -> SkillRegistry:
     """One skill per PDDL action, bound to ``world``."""
-    skills = SkillRegistry()
+    skills = SkillRegistry(simulated=True)
 
     @skills.register("move")
     def move(robot: str, source: str, target: str) -> smach.State:

@@ -22,7 +22,13 @@ from dataclasses import dataclass, field
 import smach
 from plan_bridge.execution.events import ObservationsApplied, StepFinished
 from plan_bridge.execution.semantics import ActionModel, GroundAction
-from plan_bridge.execution.world import WorldState, describe_observation, normalise_observations
+from plan_bridge.execution.world import (
+    Observation,
+    World,
+    WorldState,
+    describe_observation,
+    normalise_observations,
+)
 from plan_bridge.pddl.task import Fact
 from plan_bridge.planning.planner import PlanStep
 from plan_bridge.skills.registry import (
@@ -50,6 +56,9 @@ class StepRecord:
     unmet: tuple[str, ...] = ()
     observations_changed: tuple[str, ...] = ()
     duration_s: float = 0.0
+    observed: bool = False
+    """Whether the skill reported observations (a failed step that did not is
+    followed by a sensing pass before any replan)."""
 
 
 def step_label(index: int, step: PlanStep, width: int = 2) -> str:
@@ -73,12 +82,15 @@ class StepState(smach.Wrapper):
         *,
         check_preconditions: bool = True,
         on_finished: Callable[[StepRecord], None] | None = None,
+        world: World | None = None,
     ) -> None:
         super().__init__(outcomes=list(STEP_OUTCOMES), input_keys=[], output_keys=[])
         self.index = index
         self.ground = ground
         self.belief = belief
         self.skill = skill
+        #: The world told about a user's skill that succeeded (:meth:`World.adopt`).
+        self.world = world
         self.check_preconditions = check_preconditions
         self.on_finished = on_finished
         self.record = StepRecord(index, ground.step)
@@ -137,6 +149,20 @@ class StepState(smach.Wrapper):
             raise smach.InvalidUserCodeError(f"skill {self._path}/{label}: {exc}") from exc
         if outcome == "succeeded":
             self.belief.apply(adds, dels)
+            self._adopted(observations)
+        self._observe(record, observations)
+        record.outcome = outcome
+        return self._finish(record, started)
+
+    def _adopted(self, observations: Sequence[Observation]) -> None:
+        """A user's skill succeeded: the world learns what it did (a simulated world
+        takes the declared effects; its own skills changed it themselves)."""
+        if self.world is not None and self.skill is not None and not self.skill.simulated:
+            self.world.adopt(self.ground.step, observations)
+
+    def _observe(self, record: StepRecord, observations: Sequence[Observation]) -> None:
+        """What the skill saw overrides the belief; the changes are an event."""
+        record.observed = bool(observations)
         changed = self.belief.observe(observations)
         record.observations_changed = tuple(
             describe_observation(fact, truth) for fact, truth in changed
@@ -148,8 +174,6 @@ class StepState(smach.Wrapper):
                     path=self._path, time=t, thread=thread, changed=record.observations_changed
                 )
             )
-        record.outcome = outcome
-        return self._finish(record, started)
 
     def _finish(self, record: StepRecord, started: float) -> str:
         record.duration_s = time.monotonic() - started
@@ -201,9 +225,11 @@ def compile_plan(
     variants: Mapping[int, str] | None = None,
     time_scale: float = 0.0,
     on_failure: str = "finish",
+    world: World | None = None,
 ) -> CompiledPlan:
     """Build the SMACH machine that executes ``steps`` (numbered from ``first_index``);
-    ``variants`` maps a position in ``steps`` to the skill variant it runs.
+    ``variants`` maps a position in ``steps`` to the skill variant it runs; ``world``
+    learns what the user's skills did (see :meth:`StepState._adopted`).
 
     A temporal plan (steps with start times) becomes a
     :class:`~plan_bridge.execution.temporal.TemporalDispatch` (``time_scale``: wall
@@ -225,6 +251,7 @@ def compile_plan(
             variants=variants,
             time_scale=time_scale,
             on_failure=on_failure,
+            world=world,
         )
     width = max(2, len(str(first_index + len(steps))))
     labels = [step_label(first_index + i, s, width) for i, s in enumerate(steps)]
@@ -239,6 +266,7 @@ def compile_plan(
             skill,
             check_preconditions=check_preconditions,
             on_finished=on_finished,
+            world=world,
         )
         state.add("SKILL", skill_state)
         states.append(state)

@@ -20,9 +20,9 @@ that an abort is never replaced. A request is taken at the latest when the plan 
 force ends. Every request is recorded through the tree's controller (when one is
 attached) so the journal shows what, from where and when.
 
-(This module reads the executive's plan bookkeeping, ``_plan_in_force``,
-``_records``, ...: it is the executive's other half, kept apart so that the
-executive's loop stays readable.)
+The executive carries out a request through its public operator interface
+(:meth:`~plan_bridge.execution.executive.Executive.skip_step`, ``replan_now``,
+``running_steps``, ``stop_plan``, ``decide``).
 """
 
 from __future__ import annotations
@@ -34,9 +34,8 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
 
 from plan_bridge.errors import FactError, PlanBridgeError
-from plan_bridge.execution.compile import StepRecord, StepState
+from plan_bridge.execution.compile import StepState
 from plan_bridge.execution.replanner import MissionEnded
-from plan_bridge.execution.semantics import ActionModel
 from plan_bridge.pddl.source import SourceText
 from plan_bridge.pddl.task import Fact, FactLike, PlanningTask, format_fact, parse_fact
 from plan_bridge.pddl.up_runtime import ensure_unified_planning
@@ -222,54 +221,13 @@ class MissionControl:
             request, self._pending = self._pending, None
         if request is None:
             return plan
-        executive._decide("operator", request.reason)
+        executive.decide("operator", request.reason)
         if request.kind == "abort":
             raise MissionEnded("aborted", request.reason)
         if request.kind == "skip":
-            return self._skip(executive, request)
-        replanner = executive._replanner
-        recovery = executive._recovery
-        if request.task is not None:
-            model = ActionModel(request.task)
-            executive.task, executive.model = request.task, model
-            if replanner is not None:
-                replanner.task, replanner.model = request.task, model
-            if recovery is not None:
-                recovery.model = model
-        if executive.model.goal_holds(executive.belief.facts):
-            raise MissionEnded("succeeded", f"{request.reason}; the goal holds")
-        assert replanner is not None  # set before the first plan runs
-        result = replanner.plan(request.reason, replan=True)
-        if not result.solved:
-            raise MissionEnded(
-                "aborted",
-                f"{request.reason}: no plan ({result.status.value}): {result.explanation}",
-            )
-        executive.report.replans += 1
-        if recovery is not None:
-            recovery.generation += 1  # retries are counted per plan
-        return list(result.actions)
-
-    def _skip(self, executive: Executive, request: OperatorRequest) -> list[PlanStep]:
-        first = executive._first_in_force
-        in_force = executive._plan_in_force
-        index = request.step_index
-        assert index is not None
-        if first <= index < first + len(in_force) and not executive._succeeded(index):
-            step = in_force[index - first]
-            if request.apply_effects:
-                ground = executive.model.ground(step)
-                with executive.belief.locked() as facts:
-                    adds, dels = ground.effects(facts)
-                executive.belief.apply(adds, dels)
-            executive._step_finished(
-                StepRecord(index, step, outcome="succeeded", skill_outcome="skipped")
-            )
-        return [
-            step
-            for i, step in enumerate(in_force, start=first)
-            if i != index and not executive._succeeded(i)
-        ]
+            assert request.step_index is not None
+            return executive.skip_step(request.step_index, apply_effects=request.apply_effects)
+        return executive.replan_now(request.reason, request.task)
 
     # -- internals -----------------------------------------------------------------------------
     def _check_running(self) -> None:
@@ -281,9 +239,7 @@ class MissionControl:
 
     def _running_step(self, step: str | int | None) -> StepState:
         self._check_running()
-        compiled = self.executive._compiled
-        states = compiled.step_states if compiled is not None else []
-        running = [s for s in states if s.is_running()]
+        running = self.executive.running_steps()
         if step is None:
             if len(running) == 1:
                 return running[0]
@@ -329,9 +285,7 @@ class MissionControl:
             )
         # The plan in force stops at once (its running steps are preempted); when no
         # plan runs yet, the executive takes the request before it starts the next one.
-        compiled = self.executive._compiled
-        if compiled is not None:
-            compiled.machine.request_preempt()
+        self.executive.stop_plan()
         return request
 
 

@@ -18,14 +18,20 @@ from collections.abc import Callable, Iterable, Sequence
 from typing import TYPE_CHECKING, Any
 
 import smach
-from plan_bridge.execution.compile import CompiledPlan, StepRecord, compile_plan
+from plan_bridge.execution.compile import CompiledPlan, StepRecord, StepState, compile_plan
 from plan_bridge.execution.events import ExecutiveDecision, PlanComputed
 from plan_bridge.execution.plan_cache import PlanCache
 from plan_bridge.execution.policy import ExecutionReport, ReplanPolicy
 from plan_bridge.execution.repair import Recovery
 from plan_bridge.execution.replanner import MissionEnded, Replanner
 from plan_bridge.execution.semantics import ActionModel
-from plan_bridge.execution.world import Observation, WorldState, normalise_observations
+from plan_bridge.execution.world import (
+    Observation,
+    World,
+    WorldState,
+    describe_observation,
+    normalise_observations,
+)
 from plan_bridge.pddl.task import Fact, PlanningTask, format_fact, parse_fact
 from plan_bridge.planning.planner import Planner, PlanResult, PlanStep, get_planner
 from plan_bridge.skills.registry import SkillRegistry
@@ -43,7 +49,16 @@ class Executive(smach.Container):
     """Plans for ``task`` and executes the plan with ``skills``, replanning on failure.
 
     Outcomes: ``succeeded`` (goal reached), ``aborted`` (no plan, budget exhausted,
-    unrecoverable), ``preempted``. After a run, :attr:`report` holds the numbers.
+    unrecoverable), ``preempted``. After a run, :attr:`report` holds the numbers and
+    ``report.explanation`` says why the mission ended (always set).
+
+    The defaults are those of ``plan-bridge run``: planner ``auto`` (chosen by the
+    problem's kind: Fast Downward for classical problems, Kairos or TAMER for temporal
+    and numeric ones) and the ``full`` recovery policy. ``world`` is the
+    :class:`~plan_bridge.execution.world.World` the skills act on; by default the one
+    the registry's simulated skills act on (``symbolic_skills(world, registry)``), if
+    any. It learns what the user's own skills did and is sensed after a failure that
+    observed nothing (docs/plan-bridge.md, "The skill contract").
     """
 
     #: Operator requests (skip, replan, new goal, abort): see execution/control.py.
@@ -53,8 +68,9 @@ class Executive(smach.Container):
         self,
         task: PlanningTask,
         skills: SkillRegistry,
-        planner: Planner | str = "fast-downward",
+        planner: Planner | str = "auto",
         *,
+        world: World | None = None,
         policy: ReplanPolicy | None = None,
         belief: WorldState | None = None,
         sense: Callable[[WorldState], Iterable[Any]] | None = None,
@@ -76,6 +92,7 @@ class Executive(smach.Container):
         self._executed: list[tuple[int, str]] = []
         self.task = task
         self.skills = skills
+        self.world = world if world is not None else skills.world
         self.planner = get_planner(planner) if isinstance(planner, str) else planner
         self.policy = policy or ReplanPolicy()
         self.model = ActionModel(task)
@@ -194,11 +211,11 @@ class Executive(smach.Container):
             )
         replanner.start(self.report)
         recovery = self._recovery = Recovery(
-            self.model, self.policy, self.belief, replanner, self.report, self._decide, self.skills
+            self.model, self.policy, self.belief, replanner, self.report, self.decide, self.skills
         )
         self._sense()
         if self.model.goal_holds(self.belief.facts):
-            self._decide("done", "the goal already holds")
+            self.decide("done", "the goal already holds")
             return "succeeded"
         if resume is None:
             initial = replanner.plan("initial plan")
@@ -217,9 +234,15 @@ class Executive(smach.Container):
             if self.operator is not None and self.operator.pending() is not None:
                 continue  # the operator stopped this plan: take the request
             if outcome == "preempted":
-                self._decide("stop", "preempted")
+                self.decide("stop", "preempted")
                 return "preempted"
-            self._sense()
+            self._sense(
+                [
+                    record.step
+                    for record in self._records.values()
+                    if record.outcome == "aborted" and not record.observed
+                ]
+            )
             if self.model.goal_holds(self.belief.facts):
                 return "succeeded"
             if failed is None:
@@ -251,9 +274,10 @@ class Executive(smach.Container):
             concurrent=self.concurrent,
             check_preconditions=self.check_preconditions,
             on_finished=self._step_finished,
-            time_scale=self.time_scale,
+            time_scale=self.time_scale or (self.world.time_scale if self.world else 0.0),
             on_failure=self.on_failure,
             variants=self._recovery.variants_of(plan) if self._recovery is not None else None,
+            world=self.world,
         )
         self._compiled = compiled
         compiled.machine._parent = self
@@ -304,6 +328,60 @@ class Executive(smach.Container):
                 report.actions_failed += 1
             if record.outcome == "succeeded" and self.checkpoint is not None:
                 self.checkpoint(self.snapshot())
+
+    # -- operator requests (MissionControl, execution/control.py) --------------------------
+    def running_steps(self) -> list[StepState]:
+        """The steps of the plan in force whose skills are running now."""
+        compiled = self._compiled
+        return [s for s in compiled.step_states if s.is_running()] if compiled else []
+
+    def stop_plan(self) -> None:
+        """Preempt the plan in force (its running steps); the mission loop goes on."""
+        compiled = self._compiled
+        if compiled is not None:
+            compiled.machine.request_preempt()
+
+    def skip_step(self, index: int, *, apply_effects: bool) -> list[PlanStep]:
+        """Mark step ``index`` of the plan in force done (its effects applied to the
+        belief or not); return the rest of that plan."""
+        first, in_force = self._first_in_force, self._plan_in_force
+        if first <= index < first + len(in_force) and not self._succeeded(index):
+            step = in_force[index - first]
+            if apply_effects:
+                ground = self.model.ground(step)
+                with self.belief.locked() as facts:
+                    adds, dels = ground.effects(facts)
+                self.belief.apply(adds, dels)
+            self._step_finished(
+                StepRecord(index, step, outcome="succeeded", skill_outcome="skipped")
+            )
+        return [
+            step
+            for i, step in enumerate(in_force, start=first)
+            if i != index and not self._succeeded(i)
+        ]
+
+    def replan_now(self, reason: str, task: PlanningTask | None = None) -> list[PlanStep]:
+        """Plan from the belief now (to ``task``'s goal from then on, if given): one
+        replan of the budget. Raises :class:`MissionEnded` when the goal holds or no
+        plan reaches it."""
+        replanner, recovery = self._replanner, self._recovery
+        if replanner is None or recovery is None:
+            raise RuntimeError(f"executive {self.path}: replan_now is for a running mission")
+        if task is not None:
+            model = ActionModel(task)
+            self.task = replanner.task = task
+            self.model = replanner.model = recovery.model = model
+        if self.model.goal_holds(self.belief.facts):
+            raise MissionEnded("succeeded", f"{reason}; the goal holds")
+        result = replanner.plan(reason, replan=True)
+        if not result.solved:
+            raise MissionEnded(
+                "aborted", f"{reason}: no plan ({result.status.value}): {result.explanation}"
+            )
+        self.report.replans += 1
+        recovery.generation += 1  # retries are counted per plan
+        return list(result.actions)
 
     # -- checkpoints ------------------------------------------------------------------------------
     def snapshot(self) -> dict[str, Any]:
@@ -388,7 +466,7 @@ class Executive(smach.Container):
                 PlanStep(step.action, step.arguments, start, duration)
                 for step, (start, duration) in zip(plan, timing, strict=True)
             ]
-        self._decide("resume", f"resuming with {len(plan)} steps left from a checkpoint")
+        self.decide("resume", f"resuming with {len(plan)} steps left from a checkpoint")
         return plan, int(snapshot["first_index"])
 
     def _failure_reason(self, step: PlanStep, record: StepRecord | None) -> str:
@@ -427,7 +505,15 @@ class Executive(smach.Container):
             )
 
     # -- belief --------------------------------------------------------------------------------
-    def _sense(self) -> None:
+    def _sense(self, unobserved: Sequence[PlanStep] = ()) -> None:
+        """Refresh the belief: the world is sensed around steps that failed without
+        observing anything (a user's skill that just said "aborted"), then the
+        ``sense`` callback, if any, runs."""
+        if self.world is not None and unobserved:
+            changed = self.belief.observe(self.world.sense(unobserved))
+            seen = ", ".join(describe_observation(f, v) for f, v in changed) or "nothing new"
+            steps = ", ".join(str(step) for step in unobserved)
+            self.decide("sense", f"{steps} failed without observing; sensed: {seen}")
         if self.sense is None:
             return
         observations: list[Observation] = normalise_observations(self.sense(self.belief))
@@ -437,7 +523,7 @@ class Executive(smach.Container):
         if self._preempt_requested:
             raise MissionEnded("preempted", "preempted")
 
-    def _decide(self, decision: str, reason: str, step: str = "") -> None:
+    def decide(self, decision: str, reason: str, step: str = "") -> None:
         self.report.decisions.append({"decision": decision, "reason": reason, "step": step})
         if self._observed():
             t, thread = stamp()

@@ -28,6 +28,7 @@ import smach
 from plan_bridge.errors import PlanBridgeError
 
 if TYPE_CHECKING:
+    from plan_bridge.execution.world import World
     from plan_bridge.pddl.task import PlanningTask
     from plan_bridge.planning.planner import PlanStep
 
@@ -55,6 +56,13 @@ class Skill:
     outcome_map: Mapping[str, str] = field(default_factory=dict)
     variant: str = ""
     """The variant's name; ``""`` for the action's main skill."""
+    simulated: bool = False
+    """Whether the skill acts on the simulated world itself (a domain's simulated skill).
+
+    False for a user's own skill (a robot driver, a skill-map entry): when it succeeds,
+    a simulated world takes the action's declared effects into its truth
+    (:meth:`~plan_bridge.execution.world.World.adopt`), so the simulated skills around
+    it see what it did. See "The skill contract" in docs/plan-bridge.md."""
 
     def map_outcome(self, outcome: str) -> str:
         return self.outcome_map.get(outcome, outcome)
@@ -97,13 +105,26 @@ class Skill:
 class SkillRegistry:
     """Action name -> :class:`Skill`."""
 
-    def __init__(self, fallback: Callable[[PlanStep], smach.State] | None = None) -> None:
+    def __init__(
+        self,
+        fallback: Callable[[PlanStep], smach.State] | None = None,
+        *,
+        simulated: bool = False,
+    ) -> None:
         self._skills: dict[str, Skill] = {}
+        #: The default of :attr:`Skill.simulated` for skills registered here: True in a
+        #: domain's registry of simulated skills, False (a user's own skills) otherwise.
+        self.simulated = simulated
         #: Other ways to perform an action (``register(..., variant="two-handed")``), in
         #: registration order: the executive tries them when the main skill keeps failing.
         self._variants: dict[str, dict[str, Skill]] = {}
         #: Builds a state for actions without a registered skill (e.g. symbolic skills).
+        #: A fallback is the world's own simulation of the action.
         self.fallback = fallback
+        #: The world the fallback (and the simulated skills) act on; set by
+        #: :func:`~plan_bridge.execution.simulation.symbolic_skills` and friends, so that
+        #: ``Executive(task, skills)`` finds it without being told.
+        self.world: World | None = None
 
     def register(
         self,
@@ -111,13 +132,17 @@ class SkillRegistry:
         *,
         outcome_map: Mapping[str, str] | None = None,
         variant: str | None = None,
+        simulated: bool | None = None,
     ) -> Callable[[SkillFactory], SkillFactory]:
         """Decorator: ``@skills.register("pick")`` on a factory ``f(*args) -> State``.
 
         ``variant="..."`` registers another way to perform the action (a different
         grasp, a slower approach); the executive switches to it when the main skill
-        fails while the plan is still valid."""
+        fails while the plan is still valid. ``simulated`` (default: the registry's
+        :attr:`simulated`) says whether the skill acts on the simulated world itself
+        (see :attr:`Skill.simulated`)."""
         name = action.lower()
+        sim = self.simulated if simulated is None else simulated
 
         def decorate(factory: SkillFactory) -> SkillFactory:
             if variant:
@@ -130,7 +155,7 @@ class SkillRegistry:
                     raise SkillError(
                         f"the skill variant {name!r}/{variant!r} must be callable, got {factory!r}"
                     )
-                known[variant] = Skill(name, factory, dict(outcome_map or {}), variant)
+                known[variant] = Skill(name, factory, dict(outcome_map or {}), variant, sim)
                 return factory
             if name in self._skills:
                 raise SkillError(
@@ -139,16 +164,21 @@ class SkillRegistry:
                 )
             if not callable(factory):
                 raise SkillError(f"the skill for {name!r} must be callable, got {factory!r}")
-            self._skills[name] = Skill(name, factory, dict(outcome_map or {}))
+            self._skills[name] = Skill(name, factory, dict(outcome_map or {}), simulated=sim)
             return factory
 
         return decorate
 
     def add(
-        self, action: str, factory: SkillFactory, *, outcome_map: Mapping[str, str] | None = None
+        self,
+        action: str,
+        factory: SkillFactory,
+        *,
+        outcome_map: Mapping[str, str] | None = None,
+        simulated: bool | None = None,
     ) -> None:
         """Register without a decorator."""
-        self.register(action, outcome_map=outcome_map)(factory)
+        self.register(action, outcome_map=outcome_map, simulated=simulated)(factory)
 
     def __contains__(self, action: object) -> bool:
         return isinstance(action, str) and action.lower() in self._skills
