@@ -12,14 +12,14 @@ from __future__ import annotations
 import random
 import threading
 import time
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import smach
-from plan_bridge.execution.semantics import ActionModel
+from plan_bridge.execution.semantics import ActionModel, GroundAction
 from plan_bridge.execution.snapshots import SnapshotError, decode, encode
-from plan_bridge.execution.world import FactSnapshot
+from plan_bridge.execution.world import FactSnapshot, Observation
 from plan_bridge.pddl.task import Fact, PlanningTask, format_fact, parse_fact
 from plan_bridge.planning.planner import PlanStep
 from plan_bridge.skills.registry import SkillRegistry
@@ -236,6 +236,49 @@ class SimulatedWorld:
             )
         return ok, observations
 
+    # -- the World protocol (plan_bridge.execution.world.World) ---------------------------
+    def now(self) -> float:
+        return float(self.sim_time)
+
+    def adopt(self, step: PlanStep, observations: Sequence[Observation]) -> None:
+        """A skill that is not the world's own did ``step`` and succeeded: its declared
+        effects become true (computed in the true state), then its observations."""
+        ground = self.model.ground(step)
+        with self._lock:
+            self.actions_run += 1
+            adds, dels, values = ground.all_effects(self.state_now())
+            self._apply(adds, dels, values)
+            for fact, value in observations:
+                if isinstance(value, bool):
+                    (self._facts.add if value else self._facts.discard)(fact)
+                else:
+                    self.values[format_fact(fact)] = value
+
+    def sense(self, steps: Sequence[PlanStep]) -> list[Observation]:
+        """The truth of the atoms and numbers ``steps`` read or change (what a robot
+        looking at the places and things of those actions would see)."""
+        with self._lock:
+            state = self.state_now()
+            seen: dict[Fact, bool | float] = {}
+            for step in steps:
+                seen.update(self._readings(self.model.ground(step), state))
+        return sorted(seen.items(), key=lambda item: item[0])
+
+    def _readings(self, ground: GroundAction, state: FactSnapshot) -> list[Observation]:
+        """What a robot sees of the atoms and numbers ``ground`` touches in ``state``."""
+        adds, dels, values = ground.all_effects(state)
+        atoms = set(ground.precondition_atoms() or ()) | adds | dels
+        out: list[Observation] = [(fact, fact in state) for fact in sorted(atoms)]
+        out.extend((atom, state.values[atom]) for atom in sorted(values) if atom in state.values)
+        return out
+
+    def figures(self) -> dict[str, Any]:
+        return {
+            "sim_time_s": round(float(self.sim_time), 3),
+            "faults_injected": self.faults_injected,
+            "actions_run": self.actions_run,
+        }
+
     def _apply(self, adds: set[Fact], dels: set[Fact], values: Mapping[Fact, float]) -> None:
         """Change the true facts and numbers (call with the lock held)."""
         self._facts.difference_update(dels)
@@ -310,4 +353,5 @@ def symbolic_skills(world: SimulatedWorld, registry: SkillRegistry | None = None
     """A registry whose unregistered actions run as symbolic skills in ``world``."""
     registry = registry or SkillRegistry()
     registry.fallback = lambda step: SymbolicSkill(world, step)
+    registry.world = world
     return registry

@@ -72,7 +72,7 @@ from plan_bridge.execution.compile import (
     step_label,
 )
 from plan_bridge.execution.semantics import ActionModel, GroundAction
-from plan_bridge.execution.world import WorldState, describe_observation, normalise_observations
+from plan_bridge.execution.world import World, WorldState, normalise_observations
 from plan_bridge.pddl.task import Fact
 from plan_bridge.planning.planner import PlanStep
 from plan_bridge.skills.registry import OBSERVATIONS_KEY, STEP_KEYS, SkillRegistry
@@ -315,6 +315,7 @@ class TimedStepState(StepState):
         *,
         check_preconditions: bool = True,
         on_finished: Callable[[StepRecord], None] | None = None,
+        world: World | None = None,
     ) -> None:
         super().__init__(
             index,
@@ -323,6 +324,7 @@ class TimedStepState(StepState):
             skill,
             check_preconditions=check_preconditions,
             on_finished=on_finished,
+            world=world,
         )
         step = ground.step
         self.timing = Timing(step.start or 0.0, step.duration or 0.0)
@@ -445,15 +447,26 @@ class TimedStepState(StepState):
             if unmet:
                 outcome = "aborted"
                 record.unmet = ("at end: " + ", ".join(unmet),)
-        if outcome != "succeeded" and self.on_failed is not None:
-            self.on_failed(outcome)
-        changed = self.belief.observe(observations)
-        record.observations_changed = tuple(
-            describe_observation(fact, truth) for fact, truth in changed
-        )
+            else:
+                self._adopted(observations)
+        if outcome != "succeeded":
+            if self.on_failed is not None:
+                self.on_failed(outcome)
+            self._take_back()
+        self._observe(record, observations)
         record.outcome = outcome
         self._ended(outcome)
         return self._finish(record, started)
+
+    def _take_back(self) -> None:
+        """A step that did not end well undid its start (a robot stopped mid-drive is
+        back where it began): its at-start changes of facts leave the belief; what
+        its skill observed (applied next) wins. Numbers it spent stay spent."""
+        with self.effects_lock:
+            if self.in_flight is not None:
+                removed, added = self.in_flight
+                self.belief.apply(removed, added)
+                self.in_flight = None
 
     def _end_ready(self) -> None:
         if self.before_end is not None and not self._violation:
@@ -856,6 +869,7 @@ def compile_temporal(
     variants: Mapping[int, str] | None = None,
     time_scale: float = 0.0,
     on_failure: str = "finish",
+    world: World | None = None,
 ) -> CompiledPlan:
     """A temporal plan as a :class:`TemporalDispatch` of :class:`TimedStepState` steps
     (labels as for sequential plans: ``03_NAVIGATE_R1_DOCK_HALL``)."""
@@ -872,6 +886,7 @@ def compile_temporal(
             skill,
             check_preconditions=check_preconditions,
             on_finished=on_finished,
+            world=world,
         )
         state.add("SKILL", skill_state)
         states.append(state)

@@ -226,4 +226,5 @@ def timed_skills(world: TimedWorld, registry: SkillRegistry | None = None) -> Sk
     """A registry whose unregistered actions run as :class:`TimedSkill` in ``world``."""
     registry = registry or SkillRegistry()
     registry.fallback = lambda step: TimedSkill(world, step)
+    registry.world = world
     return registry
