@@ -20,6 +20,7 @@ __all__ = [
     "PddlError",
     "PlanBridgeError",
     "PlannerNotFoundError",
+    "Terminated",
     "UnsupportedFeatureError",
     "WorkerError",
 ]
@@ -27,6 +28,15 @@ __all__ = [
 
 class PlanBridgeError(Exception):
     """Base class of every exception raised by plan_bridge."""
+
+
+class Terminated(KeyboardInterrupt):
+    """Raised in the main thread when the process gets SIGTERM (see :func:`plan_bridge.cli.main`).
+
+    A :class:`KeyboardInterrupt`, so a termination takes the path of Ctrl-C: the
+    journal is flushed and marked interrupted (a resume continues it), the viewer,
+    the operator console and the planner workers are stopped.
+    """
 
 
 class PddlError(PlanBridgeError):

@@ -17,6 +17,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TextIO
 
+from plan_bridge.errors import Terminated
+
 __all__ = [
     "EXIT_BAD_INPUT",
     "EXIT_FAILED",
@@ -38,15 +40,6 @@ EXIT_OK = 0
 EXIT_FAILED = 1
 EXIT_BAD_INPUT = 2
 EXIT_INTERNAL = 3
-
-
-class Terminated(KeyboardInterrupt):
-    """Raised in the main thread when the process gets SIGTERM (see :func:`plan_bridge.cli.main`).
-
-    A :class:`KeyboardInterrupt`, so a termination takes the path of Ctrl-C: the
-    journal is flushed and marked interrupted (a resume continues it), the viewer,
-    the operator console and the planner workers are stopped.
-    """
 
 
 @dataclass(frozen=True)

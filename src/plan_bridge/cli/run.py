@@ -11,14 +11,14 @@ import contextlib
 import json
 import sys
 import time
-from typing import TYPE_CHECKING, Any, TextIO
+from dataclasses import replace
+from typing import TYPE_CHECKING, Any
 
 from plan_bridge.cli.base import (
     EXIT_FAILED,
     EXIT_OK,
     Command,
     InputError,
-    Terminated,
     add_input_arguments,
     bounded,
     check_input,
@@ -26,15 +26,15 @@ from plan_bridge.cli.base import (
     positive_seconds,
     resolve_input,
 )
+from plan_bridge.cli.progress import ProgressPrinter
+from plan_bridge.cli.progress import summary_text as _summary
+from plan_bridge.missions.runner import DEFAULT_FAIL_RATE
 
 if TYPE_CHECKING:
     from plan_bridge.missions.mission import Target
-    from smach.introspection.events import Event
 
 __all__ = ["ProgressPrinter"]
 
-DEFAULT_FAIL_RATE = 0.2
-"""High enough that the default run of a domain folder shows a fault and the recovery."""
 VIEWER_TIME_SCALE = 0.1
 """Wall seconds per simulated second of a simulated mission shown in the viewer."""
 
@@ -250,12 +250,7 @@ def _connect_robot(
 
 
 def _run_mission(args: argparse.Namespace, started: float, resources: Any = None) -> int:
-    from dataclasses import replace
-
-    from plan_bridge.execution.executive import Executive, ReplanPolicy
-    from plan_bridge.planning.planner import Planner, get_planner
-    from smach import SmachError
-    from smach.introspection.journal import Journal
+    from plan_bridge.missions.runner import MissionOptions, prepare_mission
 
     checkpoint: dict[str, Any] | None = None
     if args.resume:
@@ -270,14 +265,6 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
     if args.ros and args.resume:
         return fail("--resume cannot be combined with --ros (the robot's world is not journaled)")
     try:
-        policy = replace(
-            ReplanPolicy.named(args.policy),
-            max_replans=args.max_replans,
-            planner_timeout=args.timeout,
-        )
-    except ValueError as exc:
-        return fail(str(exc))
-    try:
         # The same front-end verdict as `check` and `plan`, before anything heavy loads.
         chosen = resolve_input(args)
         input_warnings = check_input(chosen.domain, chosen.problems[0])
@@ -286,7 +273,8 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
     if not args.quiet:
         for warning in input_warnings:
             print(f"warning: {warning}", file=sys.stderr, flush=True)
-    from plan_bridge.missions.mission import load_target
+    from plan_bridge.missions.mission import MissionSetup, load_target
+    from plan_bridge.planning.planner import Planner, get_planner
     from plan_bridge.planning.worker import default_pool
 
     planners: list[Planner] = []
@@ -298,15 +286,25 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
         prime=default_pool(),
         before_parse=lambda: planners.append(get_planner(args.planner)),
     )
-    planner = planners[0]
-    symbolic = target.module is None or not hasattr(target.module, "setup")
-    fail_rate = (
-        args.fail_rate if args.fail_rate is not None else (0.0 if symbolic else DEFAULT_FAIL_RATE)
+    default_scale = VIEWER_TIME_SCALE if args.viewer is not None else 0.0
+    options = MissionOptions(
+        seed=args.seed,
+        fail_rate=args.fail_rate,
+        planner=args.planner,
+        policy=args.policy,
+        max_replans=args.max_replans,
+        planner_timeout=args.timeout,
+        concurrent=args.concurrent,
+        time_scale=default_scale if args.time_scale is None else args.time_scale,
     )
-    robot = None
+    fail_rate = args.fail_rate
+    if fail_rate is None:
+        fail_rate = DEFAULT_FAIL_RATE if target.has_own_skills else 0.0
+    skills_text = "domain skills" if target.has_own_skills else "symbolic skills"
+    if target.skill_map_path is not None:
+        skills_text += f" and {target.skill_map_path.name}"
+    setup = None
     if args.ros:
-        from plan_bridge.missions.mission import MissionSetup
-
         # The skills run on the robot node, against its world: nothing is simulated here.
         robot = _connect_robot(
             args, target, args.fail_rate if args.no_robot else fail_rate, resources
@@ -314,150 +312,75 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
         # A running robot (--no-robot) has its own seed and fault rate: those count.
         fail_rate = robot.robot_info.get("fail_rate", fail_rate)
         args.seed = robot.robot_info.get("seed", args.seed)
-        setup = MissionSetup(skills=robot.skills(), concurrent=robot.concurrent)
-    else:
-        setup = target.setup(seed=args.seed, fail_rate=fail_rate)
-    problems = setup.skills.check(target.task)
-    if problems:
-        return fail("the skills do not fit the domain:\n  " + "\n  ".join(problems))
-    executive = Executive(
-        target.task,
-        setup.skills,
-        planner,
-        policy=policy,
-        sense=setup.sense,
-        concurrent=setup.concurrent or args.concurrent,
-    )
-    world = setup.world
-    if robot is None and hasattr(world, "time_scale"):
-        default_scale = VIEWER_TIME_SCALE if args.viewer is not None else 0.0
-        world.time_scale = default_scale if args.time_scale is None else args.time_scale
-        # A temporal plan plays its timeline at the world's pace.
-        executive.time_scale = float(world.time_scale)
-    from plan_bridge.execution.temporal import TimelineRecorder
-
-    timeline = TimelineRecorder()
-    executive.add_listener(timeline)
+        options = replace(options, seed=args.seed, fail_rate=fail_rate)
+        setup = MissionSetup(
+            skills=robot.skills(), world=robot.world(), concurrent=robot.concurrent
+        )
+        skills_text = f"{robot.robot_info.get('mode')} on the robot node /{robot.prefix}"
+    mission = prepare_mission(target, options, setup=setup, planner=planners[0])
+    executive = mission.executive
     if checkpoint is not None:
-        if checkpoint.get("world") is not None and hasattr(world, "restore"):
-            world.restore(checkpoint["world"])
-            world.abandon_running()  # steps in progress stopped with the process
-        executive.resume_from(checkpoint["state"])
+        mission.resume(checkpoint)
     out = sys.stderr
     if not args.quiet:
         verb = "resuming" if args.resume else "run"
-        skills_text = "symbolic skills" if symbolic else "domain skills"
-        if robot is not None:
-            skills_text = f"{robot.robot_info.get('mode')} on the robot node /{robot.prefix}"
         print(
             f"plan-bridge {verb}: {target.name}, problem {target.problem_path.name} "
             f"({skills_text}, seed {args.seed}, "
-            f"fail rate {fail_rate:g}, planner {planner.name})",
+            f"fail rate {mission.fail_rate:g}, planner {mission.planner.name})",
             file=out,
             flush=True,
         )
         executive.add_listener(ProgressPrinter(out, verbose=args.verbose))
-    journal = None
     journal_path = args.resume or args.journal
+    journal = None
     if journal_path:
         run_options = {key: getattr(args, key) for key in (*RESUMABLE, *RESUMED_UNLESS_GIVEN)}
         run_options.update(
-            target=str(args.target), problem=str(target.problem_path), fail_rate=fail_rate
+            target=str(args.target), problem=str(target.problem_path), fail_rate=mission.fail_rate
         )
-        if robot is not None:
+        if args.ros:
             # The robot's world lives in its process: checkpoints hold no world snapshot.
-            run_options["ros"] = robot.prefix
-        journal = Journal(
-            journal_path,
-            executive,
-            header={**run_options, "run": run_options},
-            append=bool(args.resume),
+            run_options["ros"] = args.ros_prefix or True
+        journal = mission.record(
+            journal_path, header={**run_options, "run": run_options}, append=bool(args.resume)
         )
         if args.resume:
             journal.write_raw("resumed", checkpoint=checkpoint is not None)
-        active_journal = journal
-
-        def write_checkpoint(state: dict[str, Any]) -> None:
-            snap = world.snapshot() if hasattr(world, "snapshot") else None
-            active_journal.write_state("checkpoint", state=state, world=snap)
-
-        executive.checkpoint = write_checkpoint
     viewer = None
     if args.viewer is not None or args.control:
         from smach.introspection import serve
 
         viewer = serve(executive, port=args.viewer or 0)
-    console = None
+        # Closed after the wait below (the finished mission stays on the page), or on an error.
+        if resources is not None:
+            resources.callback(viewer.close)
+        else:
+            mission.on_close(viewer.close)
     if args.control or args.breakpoints or args.start_paused:
         from plan_bridge.execution.control import OperatorConsole
 
         console = OperatorConsole(
             executive, journal=journal, breakpoints=args.breakpoints, paused=args.start_paused
         )
+        mission.on_close(console.close)
         if args.control and viewer is not None:
             from smach.introspection.control_api import enable_controls
 
             url = enable_controls(viewer, console.controller, actions=console.viewer_actions())
             print(f"control: {url}", file=sys.stderr, flush=True)
-    interrupted: KeyboardInterrupt | None = None
-    try:
-        outcome = executive.execute()
-    except KeyboardInterrupt as exc:
-        interrupted = exc  # Ctrl-C or SIGTERM: not an end, a resume continues the run
-        raise
-    except SmachError as exc:
-        # A skill broke its contract (undeclared key, bad outcome, exception): the
-        # message names the state path; the mission failed.
-        outcome = None
-        executive.report.explanation = str(exc)
-        print(f"plan-bridge: mission failed: {exc}", file=sys.stderr, flush=True)
-    finally:
-        if console is not None:
-            console.close()
-        if viewer is not None and resources is not None:
-            resources.callback(viewer.close)  # after the wait below, or on an error
-        elif viewer is not None:
-            viewer.close()
-        report = executive.report
-        if journal is not None:
-            if interrupted is None:
-                journal.write_record("summary", **report.to_json())
-            else:
-                by = "SIGTERM" if isinstance(interrupted, Terminated) else "SIGINT"
-                journal.write_raw("interrupted", signal=by)
-            journal.close()
-    faults = getattr(world, "faults_injected", None)
-    robot_info = robot.info() if robot is not None else None
-    if robot_info is not None:
-        faults = robot_info.get("faults_injected")
+    outcome = mission.run()
+    if mission.error is not None:
+        print(f"plan-bridge: mission failed: {mission.error}", file=sys.stderr, flush=True)
+    report = executive.report
+    figures = mission.figures()
     if args.json:
-        data: dict[str, Any] = {
-            "target": target.name,
-            "problem": target.problem_path.name,
-            "seed": args.seed,
-            "fail_rate": fail_rate,
-            "planner": planner.name,
-            **report.to_json(),
-        }
-        if timeline.temporal:
-            data["makespan_planned"] = timeline.makespan_planned
-            executed = timeline.makespan_executed
-            data["makespan_executed"] = None if executed is None else round(executed, 4)
-        if faults is not None:
-            data["faults_injected"] = faults
-        if hasattr(world, "sim_time"):
-            data["sim_time_s"] = round(float(world.sim_time), 3)
-        if robot is not None:
-            data["ros"] = {
-                "prefix": robot.prefix,
-                "robot": "started" if robot.start_robot else "connected",
-                "robot_info": robot_info,
-            }
-            if robot_info is not None:
-                data["sim_time_s"] = robot_info.get("sim_time")
-        print(json.dumps(data, indent=None))
+        print(json.dumps(figures, indent=None))
     if not args.quiet:
-        print(_summary(outcome, report, faults), file=out, flush=True)
+        print(_summary(outcome, report, figures.get("faults_injected")), file=out, flush=True)
+    if args.quiet and not report.goal_reached:
+        # No silent end: why the mission stopped (the summary says it without --quiet).
+        print(f"plan-bridge: goal not reached: {report.explanation}", file=sys.stderr)
     if viewer is not None and resources is not None:
         # The mission is over, the page is not: keep it for whoever is looking.
         print(
@@ -468,67 +391,6 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
         with contextlib.suppress(KeyboardInterrupt):
             viewer.wait()
     return EXIT_OK if report.goal_reached else EXIT_FAILED
-
-
-def _summary(outcome: str | None, report: Any, faults: int | None) -> str:
-    fault_text = f", {faults} faults injected" if faults is not None else ""
-    return (
-        f"summary: {outcome}{' (goal reached)' if report.goal_reached else ' (goal NOT reached)'}; "
-        f"{report.actions_executed} actions ({report.actions_failed} failed){fault_text}; "
-        f"{report.retries} retries, {report.variants_tried} skill variants, "
-        f"{report.continues} continues, "
-        f"{report.repairs} repairs ({report.repair_attempts} tried), "
-        f"{report.replans} replans ({report.holds} held the plan); "
-        f"{report.planner_calls} planner calls, {report.plans_reused} plans reused, "
-        f"planning {report.planning_time_s:.2f} s, execution {report.execution_time_s:.2f} s, "
-        f"total {report.total_time_s:.2f} s"
-        + (f"\n  reason: {report.explanation}" if not report.goal_reached else "")
-    )
-
-
-class ProgressPrinter:
-    """Prints one line per step, per plan and per recovery; ``verbose``: also the
-    states each step enters and every decision of the executive."""
-
-    #: Decisions printed only with ``verbose``: what was considered and not done.
-    CONSIDERED = frozenset({"repair-skipped", "repair-rejected"})
-
-    def __init__(self, stream: TextIO, *, verbose: bool = False) -> None:
-        self.stream = stream
-        self.verbose = verbose
-        self.total = 0
-
-    def __call__(self, event: Event) -> None:
-        from plan_bridge.execution.events import ExecutiveDecision, PlanComputed, StepFinished
-        from smach.introspection.events import StateEntered
-
-        write = self.stream.write
-        if isinstance(event, PlanComputed):
-            # A replan's reason is on its [replan] line already.
-            reason = event.reason if event.reason == "initial plan" or self.verbose else "new plan"
-            if event.status == "solved":
-                self.total = len(event.steps)
-                write(
-                    f"[plan] {reason}: {len(event.steps)} steps "
-                    f"({event.planner}, {event.planning_time_s:.2f} s)\n"
-                )
-            else:
-                write(f"[plan] {reason}: {event.status}: {event.explanation}\n")
-        elif isinstance(event, ExecutiveDecision):
-            if not self.verbose and event.decision in self.CONSIDERED:
-                return
-            write(f"[{event.decision}] {event.reason}\n")
-        elif isinstance(event, StepFinished):
-            write(
-                f"  step {event.index}: {event.action} -> {event.outcome}"
-                f"{'' if event.outcome == event.skill_outcome or not event.skill_outcome else f' (skill: {event.skill_outcome})'}"
-                f" [{event.duration_s * 1000:.0f} ms]\n"
-            )
-        elif self.verbose and isinstance(event, StateEntered) and "/SKILL/" in event.path:
-            write(f"    {event.path}\n")
-        else:
-            return
-        self.stream.flush()
 
 
 def _configure_check(parser: argparse.ArgumentParser) -> None:

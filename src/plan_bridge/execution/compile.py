@@ -57,8 +57,10 @@ class StepRecord:
     observations_changed: tuple[str, ...] = ()
     duration_s: float = 0.0
     observed: bool = False
-    """Whether the skill reported observations (a failed step that did not is
-    followed by a sensing pass before any replan)."""
+    """Whether the skill reported observations."""
+    by_user: bool = False
+    """Whether a user's own skill ran it (not a simulated one): when it fails without
+    observing, the world is sensed around it before any replan."""
 
 
 def step_label(index: int, step: PlanStep, width: int = 2) -> str:
@@ -163,6 +165,7 @@ class StepState(smach.Wrapper):
     def _observe(self, record: StepRecord, observations: Sequence[Observation]) -> None:
         """What the skill saw overrides the belief; the changes are an event."""
         record.observed = bool(observations)
+        record.by_user = self.skill is not None and not self.skill.simulated
         changed = self.belief.observe(observations)
         record.observations_changed = tuple(
             describe_observation(fact, truth) for fact, truth in changed

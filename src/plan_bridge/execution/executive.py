@@ -240,7 +240,7 @@ class Executive(smach.Container):
                 [
                     record.step
                     for record in self._records.values()
-                    if record.outcome == "aborted" and not record.observed
+                    if record.outcome == "aborted" and record.by_user and not record.observed
                 ]
             )
             if self.model.goal_holds(self.belief.facts):

@@ -18,6 +18,7 @@ in a simulated world.
 from __future__ import annotations
 
 import importlib.util
+import inspect
 import sys
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
@@ -25,12 +26,14 @@ from pathlib import Path
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
+import smach
 from plan_bridge.errors import PlanBridgeError
 from plan_bridge.execution.simulation import SimulatedWorld, symbolic_skills
 from plan_bridge.pddl.task import PlanningTask, load_task
 from plan_bridge.skills.registry import SkillRegistry
 
 if TYPE_CHECKING:
+    from plan_bridge.execution.world import World, WorldState
     from plan_bridge.planning.worker import WorkerPool
 
 __all__ = ["MissionSetup", "ScriptedMission", "Target", "TargetError", "load_target"]
@@ -45,9 +48,10 @@ class MissionSetup:
     """What a domain provides for a run: skills and, optionally, more."""
 
     skills: SkillRegistry
-    world: Any = None
-    """The simulated world (reported in summaries if it has ``faults_injected``)."""
-    sense: Callable[[Any], Iterable[Any]] | None = None
+    world: World | None = None
+    """The world the skills act on (default: the one ``skills``' simulated skills act
+    on, ``skills.world``); it learns what the user's own skills did."""
+    sense: Callable[[WorldState], Iterable[Any]] | None = None
     concurrent: bool = False
     """Run independent steps (e.g. of two robots) concurrently."""
     extra: dict[str, Any] = field(default_factory=dict)
@@ -61,9 +65,9 @@ class ScriptedMission:
     judged by ``world.goal_reached()``, the same check as for planned runs.
     """
 
-    machine: Any
+    machine: smach.State
     """A ``smach.State`` (normally a StateMachine) whose userdata is already filled."""
-    world: Any
+    world: World
     extra: dict[str, Any] = field(default_factory=dict)
 
 
@@ -85,14 +89,50 @@ class Target:
             return [self.problem_path]
         return sorted((self.folder / "problems").glob("*.pddl"))
 
-    def setup(self, *, seed: int, fail_rate: float) -> MissionSetup:
-        """Skills and world for one run."""
+    @property
+    def skill_map_path(self) -> Path | None:
+        """The folder's ``skills.toml`` (see :mod:`plan_bridge.skills.skill_map`), if any."""
+        if self.folder is None:
+            return None
+        from plan_bridge.skills.skill_map import find_skill_map
+
+        return find_skill_map(self.folder)
+
+    @property
+    def has_own_skills(self) -> bool:
+        """Whether the folder's Python defines ``setup()`` (its own skills and world)."""
+        return self.module is not None and hasattr(self.module, "setup")
+
+    def setup(self, *, seed: int, fail_rate: float, variant: str = "") -> MissionSetup:
+        """Skills and world for one run: the domain's ``setup()`` (or symbolic skills),
+        then the folder's ``skills.toml`` on top (its :class:`SkillMap` in
+        ``extra["skill_map"]``). Raises :class:`SkillMapError` for a bad map."""
+        result = self._domain_setup(seed=seed, fail_rate=fail_rate, variant=variant)
+        path = self.skill_map_path
+        if path is not None:
+            from plan_bridge.skills.skill_map import load_skill_map
+
+            skill_map = load_skill_map(path, self.task, package=self.module)
+            origin = getattr(self.module, "__file__", None) or self.folder
+            skill_map.apply(
+                result.skills,
+                registered_by=f"the domain's setup() ({origin})" if self.has_own_skills else "",
+            )
+            result.extra["skill_map"] = skill_map
+        return result
+
+    def _domain_setup(self, *, seed: int, fail_rate: float, variant: str) -> MissionSetup:
         factory = getattr(self.module, "setup", None) if self.module is not None else None
         if factory is None:
-            world = SimulatedWorld(self.task, seed=seed, fail_rate=fail_rate)
+            world = SimulatedWorld(self.task, seed=seed, fail_rate=fail_rate, variant=variant)
             return MissionSetup(skills=symbolic_skills(world), world=world)
+        options: dict[str, Any] = {"seed": seed, "fail_rate": fail_rate}
+        if variant:
+            if "variant" not in inspect.signature(factory).parameters:
+                raise TargetError(f"{self.folder}: setup() does not take a world variant")
+            options["variant"] = variant
         try:
-            result = factory(self.task, seed=seed, fail_rate=fail_rate)
+            result = factory(self.task, **options)
         except PlanBridgeError:
             raise
         except Exception as exc:

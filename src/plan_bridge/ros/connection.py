@@ -18,16 +18,18 @@ import subprocess
 import sys
 import threading
 import time
+from collections.abc import Sequence
 from typing import Any, TextIO
 
 import smach
 from plan_bridge.errors import PlanBridgeError
+from plan_bridge.execution.world import Observation
 from plan_bridge.planning.planner import PlanStep
 from plan_bridge.ros.protocol import task_digest
 from plan_bridge.ros.skills import remote_info, ros_skills
 from plan_bridge.skills.registry import SkillRegistry
 
-__all__ = ["RobotConnection", "RobotError", "RobotLost"]
+__all__ = ["RobotConnection", "RobotError", "RobotLost", "RobotWorld"]
 
 _nodes = itertools.count(1)
 
@@ -262,6 +264,10 @@ class RobotConnection:
         registry.fallback = skill
         return registry
 
+    def world(self) -> RobotWorld:
+        """The robot's world as the executive sees it (a :class:`World`)."""
+        return RobotWorld(self)
+
     def info(self, timeout: float = 5.0) -> dict[str, Any] | None:
         """The robot's current ``info`` (None if it does not answer)."""
         try:
@@ -302,3 +308,73 @@ class RobotConnection:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+class RobotWorld:
+    """The world of a robot node, seen from the executive (a
+    :class:`~plan_bridge.execution.world.World`).
+
+    The robot's skills act on it over ROS 2; the executive keeps the wall clock and
+    learns the robot's numbers (faults, simulated time) from its ``info`` service.
+    It cannot be saved (a run with ``--ros`` is not resumable): its state lives in the
+    robot's process.
+    """
+
+    time_scale = 0.0  # the robot's pace is its own (``--time-scale`` of its process)
+
+    def __init__(self, robot: RobotConnection) -> None:
+        self.robot = robot
+        self._origin = time.monotonic()
+        self._info: dict[str, Any] = {}
+
+    def now(self) -> float:
+        return time.monotonic() - self._origin
+
+    def adopt(self, step: PlanStep, observations: Sequence[Observation]) -> None:
+        """Nothing to take: the robot's world changed by itself. (A user's skill run in
+        the executive's process beside a *simulated* robot node is not seen by the
+        node's simulated world: write it as a skill of the robot node instead.)"""
+
+    def sense(self, steps: Sequence[PlanStep]) -> list[Observation]:
+        """The robot node reports what it sees with each skill's result; it has no
+        separate sensing service, so there is nothing more to sense here."""
+        return []
+
+    def latest_info(self) -> dict[str, Any]:
+        """The robot's ``info`` now, or the last one it gave (it may be gone)."""
+        info = self.robot.info() if self.robot.node is not None else None
+        if info is not None:
+            self._info = info
+        return self._info
+
+    @property
+    def faults_injected(self) -> int | None:
+        value = self.latest_info().get("faults_injected")
+        return None if value is None else int(value)
+
+    def goal_reached(self) -> bool:
+        return bool(self.latest_info().get("goal_reached", False))
+
+    def snapshot(self) -> dict[str, Any] | None:
+        return None
+
+    def restore(self, data: dict[str, Any]) -> None:
+        raise RobotError(
+            "a robot node's world cannot be restored: its state lives in its own process"
+        )
+
+    def abandon_running(self) -> None:
+        """Nothing to undo here: the robot node ends its own actions."""
+
+    def figures(self) -> dict[str, Any]:
+        info = self.latest_info() or None
+        robot = self.robot
+        return {
+            "faults_injected": None if info is None else info.get("faults_injected"),
+            "sim_time_s": None if info is None else info.get("sim_time"),
+            "ros": {
+                "prefix": robot.prefix,
+                "robot": "started" if robot.start_robot else "connected",
+                "robot_info": info,
+            },
+        }

@@ -186,6 +186,10 @@ class SkillRegistry:
     def get(self, action: str) -> Skill | None:
         return self._skills.get(action.lower())
 
+    def get_variant(self, action: str, variant: str) -> Skill | None:
+        """The skill registered as ``variant`` of ``action``, or None."""
+        return self._variants.get(action.lower(), {}).get(variant)
+
     def variants(self, action: str) -> tuple[str, ...]:
         """Names of the variants registered for ``action``, in registration order."""
         return tuple(self._variants.get(action.lower(), ()))

@@ -24,7 +24,16 @@ def _run(*args: str) -> tuple[subprocess.CompletedProcess[str], float]:
 
 
 def test_every_subcommand_is_in_the_table() -> None:
-    assert set(commands()) == {"run", "check", "control", "plan", "view", "export", "study"}
+    assert set(commands()) == {
+        "run",
+        "check",
+        "control",
+        "plan",
+        "skills",
+        "view",
+        "export",
+        "study",
+    }
 
 
 def test_subcommand_modules_do_not_import_the_cli_table_back() -> None:

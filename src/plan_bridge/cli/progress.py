@@ -1,0 +1,236 @@
+"""What ``plan-bridge run`` prints while a mission runs and after it: the progress
+lines (:class:`ProgressPrinter`) and the summary (:func:`summary_lines`).
+
+One line per step, per plan and per recovery:
+
+* a step's line comes when it ends; a step of a temporal plan also shows when the
+  plan starts it and for how long (plan seconds), and its line waits for those of the
+  running steps planned to start before it, so the lines follow the plan's order;
+* a plan's line says why it was computed (the initial plan, a replan, a repair) and,
+  for a temporal plan, its makespan; a repair the executive rejects is not shown as a
+  plan (``-v`` shows it, with why it was rejected);
+* a recovery's line names the decision and its reason; when several steps of one
+  plan failed (concurrent or temporal steps), each one after the first gets a
+  ``[recover]`` line that says what becomes of it.
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import TYPE_CHECKING, Any, TextIO
+
+if TYPE_CHECKING:
+    from smach.introspection.events import Event
+
+__all__ = ["ProgressPrinter", "summary_lines", "summary_text"]
+
+
+def _count(n: int, one: str, many: str) -> str:
+    return f"{n} {one if n == 1 else many}"
+
+
+def summary_lines(outcome: str | None, report: Any, faults: int | None) -> list[str]:
+    """The summary of a run: the outcome, then a few indented lines (actions,
+    recovery, time, and the reason when the goal was not reached)."""
+    reached = "goal reached" if report.goal_reached else "goal NOT reached"
+    actions = f"  actions: {report.actions_executed} run, {report.actions_failed} failed" + (
+        f"; {_count(faults, 'fault', 'faults')} injected" if faults is not None else ""
+    )
+    recovered = [
+        _count(report.retries, "retry", "retries"),
+        _count(report.variants_tried, "skill variant", "skill variants"),
+        _count(report.continues, "continue", "continues"),
+        _count(report.repairs, "repair", "repairs")
+        + (f" adopted ({report.repair_attempts} planned)" if report.repair_attempts else ""),
+        _count(report.replans, "replan", "replans"),
+        _count(report.holds, "hold", "holds"),
+    ]
+    counts = (
+        report.retries,
+        report.variants_tried,
+        report.continues,
+        report.repairs or report.repair_attempts,
+        report.replans,
+        report.holds,
+    )
+    recovery = ", ".join(text for text, n in zip(recovered, counts, strict=True) if n) or "none"
+    reused = (
+        f", {_count(report.plans_reused, 'plan reused', 'plans reused')}"
+        if report.plans_reused
+        else ""
+    )
+    calls = _count(report.planner_calls, "planner call", "planner calls")
+    lines = [
+        f"summary: {outcome} ({reached})",
+        actions,
+        f"  recovery: {recovery}",
+        f"  time: planning {report.planning_time_s:.2f} s ({calls}{reused}), "
+        f"execution {report.execution_time_s:.2f} s, total {report.total_time_s:.2f} s",
+    ]
+    if not report.goal_reached:
+        lines.append(f"  reason: {report.explanation}")
+    return lines
+
+
+def summary_text(outcome: str | None, report: Any, faults: int | None) -> str:
+    """:func:`summary_lines` joined into one string (no trailing newline)."""
+    return "\n".join(summary_lines(outcome, report, faults))
+
+
+#: What becomes of a failed step that is not the one a recovery decision is about
+#: (the executive decides about the first failed step of the plan and goes on with
+#: every step not done: see ``Executive._mission`` and ``execution/repair.py``).
+_OTHERS = {
+    "retry": "it stays in the held plan and runs again",
+    "variant": "it stays in the held plan and runs again",
+    "hold": "it stays in the held plan and runs again",
+    "continue": "it stays in the rest of the plan and runs again",
+    "repair": "it stays in the repaired plan and runs again",
+}
+_REPLACED = "the new plan, made from the belief, replaces it"
+_ENDED = "not run again: the mission ended"
+
+
+class ProgressPrinter:
+    """Prints one line per step, per plan and per recovery (see the module doc);
+    ``verbose``: also the states each step enters and every decision of the
+    executive, and every plan with its full reason.
+
+    Events come from the steps' threads: one lock keeps the lines whole and in order.
+    """
+
+    #: Decisions printed only with ``verbose``: what was considered and not done.
+    CONSIDERED = frozenset({"repair-skipped", "repair-rejected"})
+
+    def __init__(self, stream: TextIO, *, verbose: bool = False) -> None:
+        self.stream = stream
+        self.verbose = verbose
+        self.total = 0
+        self._lock = threading.Lock()
+        self._executive = ""  # the executive's path (of its plans and decisions)
+        # Temporal steps: planned (start, duration) by step index, the ones running,
+        # and the lines of ended steps held until the running ones before them end.
+        self._timing: dict[int, tuple[float, float]] = {}
+        self._running: set[int] = set()
+        self._held: dict[int, str] = {}
+        # Failed steps of the plan in force (index -> "(action) outcome"), and the
+        # failed steps a replan is about, told once its result is known.
+        self._failed: dict[int, str] = {}
+        self._after_replan: dict[int, str] = {}
+        # A planned repair, shown once the executive adopts it (else not at all).
+        self._repair_plan: str | None = None
+
+    def __call__(self, event: Event) -> None:
+        with self._lock:
+            lines = self._lines(event)
+            if lines:
+                self.stream.write("".join(f"{line}\n" for line in lines))
+                self.stream.flush()
+
+    def _lines(self, event: Event) -> list[str]:
+        from plan_bridge.execution.events import ExecutiveDecision, PlanComputed, StepFinished
+        from plan_bridge.execution.temporal import ActionStarted
+        from smach.introspection.events import ContainerTerminated, ErrorRaised, StateEntered
+
+        if isinstance(event, StepFinished):
+            return self._step_finished(event)
+        if isinstance(event, ActionStarted):
+            self._timing[event.index] = (event.planned_start, event.planned_duration)
+            self._running.add(event.index)
+            return []
+        if isinstance(event, PlanComputed):
+            self._executive = event.path
+            return self._release(everything=True) + self._plan(event)
+        if isinstance(event, ExecutiveDecision):
+            self._executive = event.path
+            return self._release(everything=True) + self._decision(event)
+        if isinstance(event, (ContainerTerminated, ErrorRaised)) and event.path == self._executive:
+            # The mission ended: whatever is still held, and the failed steps a
+            # replan that gave no plan was about.
+            lines = self._release(everything=True) + self._others(self._after_replan, _ENDED)
+            self._after_replan = {}
+            return lines
+        if self.verbose and isinstance(event, StateEntered) and "/SKILL/" in event.path:
+            return [f"    {event.path}"]
+        return []
+
+    # -- steps ---------------------------------------------------------------------------
+    def _step_finished(self, event: Any) -> list[str]:
+        skill = (
+            f" (skill: {event.skill_outcome})"
+            if event.skill_outcome and event.outcome != event.skill_outcome
+            else ""
+        )
+        timing = self._timing.pop(event.index, None)
+        planned = "" if timing is None else f" planned at {timing[0]:.2f} s for {timing[1]:.2f} s"
+        line = (
+            f"  step {event.index}: {event.action}{planned} -> {event.outcome}{skill}"
+            f" [{event.duration_s * 1000:.0f} ms]"
+        )
+        if event.outcome in ("aborted", "invalid"):
+            self._failed[event.index] = f"{event.action} {event.outcome}"
+        self._running.discard(event.index)
+        self._held[event.index] = line
+        return self._release()
+
+    def _release(self, *, everything: bool = False) -> list[str]:
+        """The held step lines no running step planned before them holds up."""
+        first_running = min(self._running, default=None)
+        if everything:
+            self._running.clear()
+            first_running = None
+        ready = sorted(i for i in self._held if first_running is None or i < first_running)
+        return [self._held.pop(i) for i in ready]
+
+    # -- plans and decisions -------------------------------------------------------------
+    def _plan(self, event: Any) -> list[str]:
+        repair = event.reason.startswith("repair:")
+        initial = event.reason == "initial plan"
+        if event.status == "solved":
+            makespan = f", makespan {event.makespan:.2f} s" if event.makespan is not None else ""
+            text = f"{len(event.steps)} steps{makespan} ({event.planner}, {event.planning_time_s:.2f} s)"
+        else:
+            text = f"{event.status}: {event.explanation}"
+        if self.verbose:
+            # The full reason; a repair's plan is a candidate until the decision.
+            lines = [f"[plan] {event.reason}: {text}"]
+        elif repair:
+            # Shown after the [repair] line if the executive adopts it; a rejected or
+            # failed repair is not a plan the mission goes on with.
+            self._repair_plan = f"[plan] repair: {text}" if event.status == "solved" else None
+            return []
+        elif event.status == "solved":
+            # A replan's reason is on its [replan] line already.
+            lines = [f"[plan] {'initial plan' if initial else 'new plan'}: {text}"]
+        else:
+            lines = [f"[plan] {'initial plan' if initial else 'no new plan'}: {text}"]
+        if event.status == "solved" and not repair:
+            self.total = len(event.steps)
+            lines += self._others(self._after_replan, _REPLACED)
+            self._after_replan = {}
+        return lines
+
+    def _decision(self, event: Any) -> list[str]:
+        decision = event.decision
+        if decision in self.CONSIDERED:
+            self._repair_plan = None
+            return [f"[{decision}] {event.reason}"] if self.verbose else []
+        lines = [f"[{decision}] {event.reason}"]
+        failed, self._failed = self._failed, {}
+        # The decision is about the first failed step; the others go on with it.
+        others = {i: text for i, text in failed.items() if i != min(failed, default=0)}
+        if decision == "repair" and self._repair_plan is not None:
+            lines.append(self._repair_plan)
+        self._repair_plan = None
+        if decision == "replan":
+            self._after_replan = others  # told with the replan's result
+        elif decision == "hold":
+            lines += self._others({**self._after_replan, **others}, _OTHERS["hold"])
+            self._after_replan = {}
+        elif decision in _OTHERS:
+            lines += self._others(others, _OTHERS[decision])
+        return lines
+
+    @staticmethod
+    def _others(failed: dict[int, str], what: str) -> list[str]:
+        return [f"[recover] step {i} {failed[i]} too: {what}" for i in sorted(failed)]
