@@ -241,9 +241,8 @@ def is_temporal(path: str, problem: str) -> bool:
 
 
 def _run(spec: RunSpec, clock: list[float]) -> dict[str, Any]:
-    from plan_bridge.execution.executive import Executive, ReplanPolicy
-    from plan_bridge.execution.temporal import TimelineRecorder
-    from plan_bridge.planning.planner import get_planner
+    import smach
+    from plan_bridge.missions.runner import MissionOptions, prepare_mission
 
     target = target_of(spec.target, spec.problem)
     task = target.task
@@ -259,53 +258,49 @@ def _run(spec: RunSpec, clock: list[float]) -> dict[str, Any]:
         scripted = getattr(target.module, "scripted", None)
         if scripted is None:
             raise ValueError(f"{target.name} has no scripted baseline")
-        mission = _call_domain(scripted, task, spec)
-        machine = mission.machine
-        if hasattr(machine, "add_listener"):
+        baseline = _call_domain(scripted, task, spec)
+        machine = baseline.machine
+        if isinstance(machine, smach.Container):
             machine.add_listener(count)
-        world = mission.world
+        world = baseline.world
         if temporal:
             world.time_scale = TEMPORAL_TIME_SCALE
         began = time.monotonic()
         outcome = machine.execute()
-        faults = getattr(world, "faults_injected", 0)
-        reached = bool(world.goal_reached())
+        numbers = world.figures()
         return {
             "outcome": outcome,
-            "goal_reached": reached,
+            "goal_reached": bool(world.goal_reached()),
             "sim_time_s": round((time.monotonic() - began) / TEMPORAL_TIME_SCALE, 1)
             if temporal
-            else round(getattr(world, "sim_time", 0.0), 3),
+            else numbers.get("sim_time_s", 0.0),
             "steps": _count_steps(exits),
-            "actions_executed": getattr(world, "actions_run", ""),
-            "faults_injected": faults,
+            "actions_executed": numbers.get("actions_run", ""),
+            "faults_injected": numbers.get("faults_injected") or 0,
         }
     policy_name, planner_name = APPROACHES[spec.approach]
-    if target.module is not None and hasattr(target.module, "setup"):
-        setup = _call_domain(target.module.setup, task, spec)
-    else:
-        setup = target.setup(seed=spec.seed, fail_rate=spec.fault_rate)
-    executive = Executive(
-        task,
-        setup.skills,
-        get_planner(planner_name),
-        policy=ReplanPolicy.named(policy_name),
-        sense=setup.sense,
-        concurrent=setup.concurrent,
+    options = MissionOptions(
+        seed=spec.seed,
+        fail_rate=spec.fault_rate,
+        planner=planner_name,
+        policy=policy_name,
+        time_scale=TEMPORAL_TIME_SCALE if temporal else 0.0,
+        variant=spec.variant,
     )
+    mission = prepare_mission(target, options)
+    executive = mission.executive
     executive.add_listener(count)
-    world = setup.world
-    timeline = TimelineRecorder()
-    if temporal and world is not None:
-        world.time_scale = executive.time_scale = TEMPORAL_TIME_SCALE
-        executive.add_listener(timeline)
-    outcome = executive.execute()
+    outcome = mission.run()
+    if mission.error is not None:
+        raise RuntimeError(mission.error)
     report = executive.report
-    faults = getattr(world, "faults_injected", 0)
-    sim_time = round(getattr(world, "sim_time", 0.0), 3)
+    world = mission.world
+    figures = world.figures() if world is not None else {}
+    faults = int(figures.get("faults_injected") or 0)
+    sim_time = figures.get("sim_time_s", 0.0)
     if temporal:
         # The executed makespan (first action's start to last one's end) in plan seconds.
-        makespan = timeline.makespan_executed
+        makespan = mission.timeline.makespan_executed
         sim_time = round((makespan or 0.0) / TEMPORAL_TIME_SCALE, 1)
     decisions = [d["decision"] for d in report.decisions]
     failed = report.actions_failed
