@@ -46,3 +46,20 @@ def test_readme_python_example_prints_what_its_comment_says() -> None:
     assert result.returncode == 0, result.stderr
     assert result.stdout.splitlines()[0] == "done cup"
     assert "stateDiagram-v2" in result.stdout
+
+
+@pytest.mark.timeout(120)
+def test_the_first_skill_block_of_the_plan_bridge_guide_runs_and_reaches_the_goal() -> None:
+    text = (ROOT / "docs" / "plan-bridge.md").read_text()
+    section = text[text.index("## Your first skill") :]
+    block = re.search(r"```python\n(.*?)```", section, re.S)
+    assert block is not None
+    code = block.group(1)
+    # The guide shows the example file's code as it is.
+    assert code in (ROOT / "examples" / "first_skill.py").read_text()
+    result = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=110, cwd=ROOT
+    )
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert "outcome: succeeded - goal reached" in result.stdout
+    assert "pr2: driving living-room -> dining-room" in result.stdout

@@ -22,7 +22,10 @@ import threading
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
-from typing import Any
+from typing import TYPE_CHECKING, Any, TypeVar
+
+if TYPE_CHECKING:
+    from plan_bridge.execution.simulation import SimulatedWorld
 
 __all__ = ["HaltedError", "Pacer", "Run", "pace"]
 
@@ -106,6 +109,9 @@ _PACED: dict[type, type] = {}
 _PACED_LOCK = threading.Lock()
 
 
+_World = TypeVar("_World", bound="SimulatedWorld")
+
+
 def _paced_class(cls: type) -> type:
     with _PACED_LOCK:
         paced = _PACED.get(cls)
@@ -143,7 +149,7 @@ def _paced_class(cls: type) -> type:
         return paced
 
 
-def pace(world: Any, pacer: Pacer) -> Any:
+def pace(world: _World, pacer: Pacer) -> _World:
     """Make ``world``'s ``sim_time`` advance in wall time for running skills (in place).
 
     ``world`` keeps its class's behaviour (it becomes an instance of a subclass that

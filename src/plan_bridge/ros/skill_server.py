@@ -168,7 +168,7 @@ class SkillServer:
         with self._lock:
             busy = sorted(str(step) for _, _, step in self._runs.values())
         world = self.world
-        faults = list(getattr(world, "faults", []))
+        faults = list(world.faults)
         return {
             **self.meta,
             "node": self.node.get_fully_qualified_name(),
@@ -179,8 +179,8 @@ class SkillServer:
             "digest": task_digest(self.task),
             "concurrent": self.concurrent,
             "busy": busy,
-            "sim_time": round(float(getattr(world, "sim_time", 0.0)), 3),
-            "actions_run": int(getattr(world, "actions_run", 0)),
+            "sim_time": round(world.now(), 3),
+            "actions_run": world.actions_run,
             "faults_injected": len(faults),
             "faults": [f"{f.kind}: {f.detail}" for f in faults[-50:]],
             "goal_reached": bool(world.goal_reached()),

@@ -188,11 +188,13 @@ def authoring_cost(target_path: str, problem: str = "") -> list[dict[str, Any]]:
 
 def fault_model(target_path: str, problem: str = "") -> dict[str, float]:
     """Fault name -> probability per unit of fault rate, from the domain's world."""
+    from plan_bridge.execution.simulation import SimulatedWorld
+
     target = target_of(target_path, problem)
-    if target.module is None or not hasattr(target.module, "setup"):
+    if not target.has_own_skills:
         return {}
-    world = target.module.setup(target.task, seed=0, fail_rate=0.0).world
-    return dict(getattr(world, "fault_scale", {}) or {})
+    world = target.setup(seed=0, fail_rate=0.0).world
+    return dict(world.fault_scale) if isinstance(world, SimulatedWorld) else {}
 
 
 # -- report.md ------------------------------------------------------------------------------------
