@@ -71,10 +71,11 @@ FLOWS: tuple[tuple[str, str, str], ...] = (
     ("plan_bridge.pddl", "PlanningTask", "plan_bridge.missions"),
     ("plan_bridge.planning", "PlanResult", "plan_bridge.execution"),
     ("plan_bridge.skills", "SkillRegistry", "plan_bridge.execution"),
+    ("plan_bridge.execution", "Executive", "plan_bridge.missions"),
+    ("smach.introspection", "Journal", "plan_bridge.missions"),
     ("plan_bridge.missions", "MissionSetup", "plan_bridge.cli"),
-    ("plan_bridge.execution", "Executive", "plan_bridge.cli"),
-    ("plan_bridge.execution", "Executive", "plan_bridge.study"),
-    ("smach.introspection", "Journal", "plan_bridge.cli"),
+    ("plan_bridge.missions", "MissionOptions", "plan_bridge.cli"),
+    ("plan_bridge.missions", "MissionOptions", "plan_bridge.study"),
 )
 
 
