@@ -152,3 +152,39 @@ def test_a_mission_that_ends_without_its_goal_says_why_even_when_quiet(
     err = capsys.readouterr().err
     assert code == 1
     assert "goal not reached: no plan (unsolvable)" in err
+
+
+ROVER_SKILL = """\
+import smach
+
+
+class Drive(smach.State):
+    # The user's drive, bound by skills.toml; reports where the rover ended up.
+    def __init__(self, rover, goal):
+        super().__init__(outcomes=["arrived", "stuck", "preempted"], output_keys=["observations"])
+        self.rover, self.goal = rover, goal
+
+    def execute(self, ud):
+        ud.observations = {f"(parked {self.rover} {self.goal})": True}
+        return "arrived"
+"""
+
+ROVER_MAP = """\
+[drive]
+factory = "rover_skills:Drive"
+arguments = ["?r", "?to"]
+outcome_map = { arrived = "succeeded", stuck = "aborted" }
+"""
+
+
+@pytest.mark.timeout(300)
+@pytest.mark.parametrize(("fail_rate", "seed"), [("0", "0"), ("0.3", "2")])
+def test_a_temporal_folder_with_a_skill_map_reaches_the_goal(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], fail_rate: str, seed: str
+) -> None:
+    folder = shutil.copytree(DATA / "timed_rover", tmp_path / "rover")
+    (folder / "rover_skills.py").write_text(ROVER_SKILL)
+    (folder / "skills.toml").write_text(ROVER_MAP)
+    code, data = run_json(capsys, str(folder), "--fail-rate", fail_rate, "--seed", seed)
+    assert code == 0, data["explanation"]
+    assert "(drive rv base ridge)" in data["executed"]  # type: ignore[operator]
