@@ -186,6 +186,12 @@ class SkillRegistry:
     def get(self, action: str) -> Skill | None:
         return self._skills.get(action.lower())
 
+    def remove(self, action: str, variant: str = "") -> Skill | None:
+        """Unregister the skill for ``action`` (or its ``variant``); the removed one."""
+        if variant:
+            return self._variants.get(action.lower(), {}).pop(variant, None)
+        return self._skills.pop(action.lower(), None)
+
     def get_variant(self, action: str, variant: str) -> Skill | None:
         """The skill registered as ``variant`` of ``action``, or None."""
         return self._variants.get(action.lower(), {}).get(variant)

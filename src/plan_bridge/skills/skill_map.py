@@ -262,25 +262,24 @@ class SkillMap:
     def apply(self, registry: SkillRegistry, *, registered_by: str = "") -> SkillRegistry:
         """Register every entry in ``registry`` as the user's own skill (not simulated).
 
-        An entry for an action (or variant) that ``registry`` already has is an error
-        naming both; ``registered_by`` says who registered the other (for messages,
-        e.g. "the domain's setup()"). An entry registered there by this same map (a
-        domain's ``setup()`` that returns the same registry each time) is left as it
-        is. Nothing is registered unless every entry fits.
+        An entry for an action (or variant) whose skill in ``registry`` is a simulated
+        one (a domain's :attr:`~plan_bridge.skills.registry.Skill.simulated` skill)
+        replaces it: your skill for that action, the rest simulated. One for an action
+        that already has a user's skill is an error naming both; ``registered_by`` says
+        who registered the other (for messages, e.g. "the domain's setup()"). An entry
+        registered there by this same map (a domain's ``setup()`` that returns the same
+        registry each time) is left as it is. Nothing is registered unless every entry
+        fits.
         """
         problems: list[MapProblem] = []
         owner = registered_by or "the registry"
         new: list[SkillMapEntry] = []
         for entry in self.entries:
             existing = registered_skill(registry, entry.action, entry.variant)
-            if existing is None:
+            if existing is None or existing.simulated:
                 new.append(entry)
                 continue
-            if (
-                existing.factory == entry.factory
-                and existing.outcome_map == entry.outcome_map
-                and not existing.simulated
-            ):
+            if existing.factory == entry.factory and existing.outcome_map == entry.outcome_map:
                 continue  # this map's entry, applied before
             shown = describe_factory(existing.factory)
             if entry.variant:
@@ -300,6 +299,7 @@ class SkillMap:
         if problems:
             raise SkillMapError(problems)
         for entry in new:
+            registry.remove(entry.action, entry.variant)
             registry.register(
                 entry.action,
                 outcome_map=dict(entry.outcome_map) or None,

@@ -188,3 +188,33 @@ def test_a_temporal_folder_with_a_skill_map_reaches_the_goal(
     code, data = run_json(capsys, str(folder), "--fail-rate", fail_rate, "--seed", seed)
     assert code == 0, data["explanation"]
     assert "(drive rv base ridge)" in data["executed"]  # type: ignore[operator]
+
+
+NAVIGATE = """\
+import smach
+
+
+def navigate(robot, origin, destination):
+    def drive(ud):
+        ud.observations = {f"(at {robot} {destination})": True}
+        return "succeeded"
+
+    return smach.CBState(
+        drive, outcomes=["succeeded", "aborted", "preempted"], output_keys=["observations"]
+    )
+"""
+
+
+@pytest.mark.timeout(300)
+@pytest.mark.parametrize("seed", ["0", "1"])
+def test_a_skill_map_replaces_a_domain_s_simulated_skill_and_the_mission_succeeds(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], seed: str
+) -> None:
+    folder = shutil.copytree(DOMAINS / "fetch_drink", tmp_path / "fetch")
+    (folder / "my_nav.py").write_text(NAVIGATE)
+    (folder / "skills.toml").write_text('navigate = "my_nav:navigate"\n')
+    mission = prepare_mission(load_target(folder), MissionOptions(seed=int(seed), fail_rate=0.3))
+    skill = mission.setup.skills.get("navigate")
+    assert skill is not None and not skill.simulated
+    code, data = run_json(capsys, str(folder), "--fail-rate", "0.3", "--seed", seed)
+    assert code == 0, data["explanation"]
