@@ -17,7 +17,7 @@ import signal
 import sys
 import threading
 from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from types import FrameType
 
 from plan_bridge.cli.base import EXIT_INTERNAL, Command, Terminated
@@ -91,9 +91,25 @@ def _sigterm_as_interrupt() -> Iterator[None]:
         signal.signal(signal.SIGTERM, previous)
 
 
+def _exit_interrupted(signum: int, frame: FrameType | None) -> None:
+    for stream in (sys.stdout, sys.stderr):
+        with suppress(OSError, ValueError):
+            stream.flush()
+    os._exit(130)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``plan-bridge`` console script."""
-    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv is None:
+        # The process's entry point. Once the command is done, the process shuts down
+        # (the planner workers stop, at exit): a Ctrl-C then ends it at once and
+        # quietly, with the status of an interrupt, not with a traceback.
+        try:
+            return main(sys.argv[1:])
+        finally:
+            if threading.current_thread() is threading.main_thread():
+                signal.signal(signal.SIGINT, _exit_interrupted)
+    argv = list(argv)
     table = commands()
     args = build_parser(argv, table).parse_args(argv)
     try:

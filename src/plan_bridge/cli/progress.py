@@ -4,8 +4,9 @@ lines (:class:`ProgressPrinter`) and the summary (:func:`summary_lines`).
 One line per step, per plan and per recovery:
 
 * a step's line comes when it ends; a step of a temporal plan also shows when the
-  plan starts it and for how long (plan seconds), and its line waits for those of the
-  running steps planned to start before it, so the lines follow the plan's order;
+  plan starts it and for how long (plan seconds), and its line waits for the lines
+  of the steps planned before it, so the lines follow the plan's order (steps that
+  never ran hold nothing back once the plan's run is over);
 * a plan's line says why it was computed (the initial plan, a replan, a repair) and,
   for a temporal plan, its makespan; a repair the executive rejects is not shown as a
   plan (``-v`` shows it, with why it was rejected);
@@ -108,11 +109,17 @@ class ProgressPrinter:
         self.total = 0
         self._lock = threading.Lock()
         self._executive = ""  # the executive's path (of its plans and decisions)
-        # Temporal steps: planned (start, duration) by step index, the ones running,
-        # and the lines of ended steps held until the running ones before them end.
+        # Temporal plans: planned (start, duration) by step index, and the lines of
+        # ended steps held until the steps planned before them have ended: ``_next``
+        # is the next step to print (None after a resume, whose first step is not
+        # known: then a line waits only for the steps before it that are running).
         self._timing: dict[int, tuple[float, float]] = {}
-        self._running: set[int] = set()
         self._held: dict[int, str] = {}
+        self._temporal = False
+        self._next: int | None = None
+        self._running: set[int] = set()
+        self._last_index = 0
+        self._resumed = False
         # Failed steps of the plan in force (index -> "(action) outcome"), and the
         # failed steps a replan is about, told once its result is known.
         self._failed: dict[int, str] = {}
@@ -130,7 +137,12 @@ class ProgressPrinter:
     def _lines(self, event: Event) -> list[str]:
         from plan_bridge.execution.events import ExecutiveDecision, PlanComputed, StepFinished
         from plan_bridge.execution.temporal import ActionStarted
-        from smach.introspection.events import ContainerTerminated, ErrorRaised, StateEntered
+        from smach.introspection.events import (
+            ContainerStarted,
+            ContainerTerminated,
+            ErrorRaised,
+            StateEntered,
+        )
 
         if isinstance(event, StepFinished):
             return self._step_finished(event)
@@ -138,6 +150,16 @@ class ProgressPrinter:
             self._timing[event.index] = (event.planned_start, event.planned_duration)
             self._running.add(event.index)
             return []
+        plan_machine = f"{self._executive}/PLAN"
+        if isinstance(event, ContainerStarted) and event.path == plan_machine:
+            # A plan starts running: its steps are numbered on from the last one.
+            lines = self._release(everything=True)
+            self._temporal = event.container_type == "TemporalDispatch"
+            self._next = None if self._resumed else self._last_index + 1
+            self._resumed = False
+            return lines
+        if isinstance(event, (ContainerTerminated, ErrorRaised)) and event.path == plan_machine:
+            return self._release(everything=True)  # what never ran holds nothing back
         if isinstance(event, PlanComputed):
             self._executive = event.path
             return self._release(everything=True) + self._plan(event)
@@ -169,17 +191,27 @@ class ProgressPrinter:
         )
         if event.outcome in ("aborted", "invalid"):
             self._failed[event.index] = f"{event.action} {event.outcome}"
+        self._last_index = max(self._last_index, event.index)
         self._running.discard(event.index)
+        if not self._temporal:
+            return [line]  # steps in sequence (or in layers): as they end
         self._held[event.index] = line
         return self._release()
 
     def _release(self, *, everything: bool = False) -> list[str]:
-        """The held step lines no running step planned before them holds up."""
-        first_running = min(self._running, default=None)
+        """The held step lines whose predecessors in the plan have been printed (with
+        ``everything``: all of them, the plan's run is over)."""
         if everything:
             self._running.clear()
-            first_running = None
-        ready = sorted(i for i in self._held if first_running is None or i < first_running)
+            ready = sorted(self._held)
+        elif self._next is not None:
+            ready = []
+            while self._next in self._held:
+                ready.append(self._next)
+                self._next += 1
+        else:
+            first_running = min(self._running, default=None)
+            ready = sorted(i for i in self._held if first_running is None or i < first_running)
         return [self._held.pop(i) for i in ready]
 
     # -- plans and decisions -------------------------------------------------------------
@@ -212,6 +244,8 @@ class ProgressPrinter:
 
     def _decision(self, event: Any) -> list[str]:
         decision = event.decision
+        if decision == "resume":
+            self._resumed = True
         if decision in self.CONSIDERED:
             self._repair_plan = None
             return [f"[{decision}] {event.reason}"] if self.verbose else []
@@ -223,7 +257,7 @@ class ProgressPrinter:
             lines.append(self._repair_plan)
         self._repair_plan = None
         if decision == "replan":
-            self._after_replan = others  # told with the replan's result
+            self._after_replan = {**self._after_replan, **others}  # told with its result
         elif decision == "hold":
             lines += self._others({**self._after_replan, **others}, _OTHERS["hold"])
             self._after_replan = {}

@@ -628,6 +628,10 @@ class ActionModel:
             binding = dict(zip(lifted.parameters, step.arguments, strict=True))
             ground = GroundAction(step, lifted, binding)
             self._ground[key] = ground
+        elif ground.step.start != step.start or ground.step.duration != step.duration:
+            # The same action planned at other times (steps compare without their
+            # times): this step's times, not those of the plan that grounded it first.
+            return GroundAction(step, ground._lifted, ground._binding)
         return ground
 
     def addable_predicates(self) -> frozenset[str]:

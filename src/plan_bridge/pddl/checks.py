@@ -551,6 +551,15 @@ def check_problem(
     if problem.goal is not None and len(problem.goal.items) == 2:
         ctx.where = "(:goal ...)"
         _formula(ctx, problem.goal.items[1], {}, "pre")
+        if _empty_conjunction(problem.goal.items[1]):
+            diags.warning(
+                source,
+                problem.goal.offset,
+                "the goal is empty: it holds in every state, so the plan is empty and "
+                "`run` ends at once (the goal already holds)",
+                "ROSPlan-style problems leave (:goal (and)) to be filled at run time; "
+                "write the goal atoms here to plan for them",
+            )
     if problem.metric is not None:
         ctx.where = "(:metric ...)"
         items = problem.metric.items[1:]
@@ -569,6 +578,15 @@ def check_problem(
     for head, form in problem.sections:
         if head in (":htn", ":constraints"):
             _unsupported_section(source, diags, head, form)
+
+
+def _empty_conjunction(node: Node) -> bool:
+    """``(and)``, or conjunctions of nothing but ``(and)``: a goal that always holds."""
+    return (
+        isinstance(node, Form)
+        and node.head.lower() == "and"
+        and all(_empty_conjunction(item) for item in node.items[1:])
+    )
 
 
 def _init_fact(ctx: _Context, fact: Node) -> None:

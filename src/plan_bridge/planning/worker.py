@@ -483,13 +483,22 @@ class WorkerPool:
             self._condition.notify_all()
         if os.getpid() != self._pid:
             return  # inherited through fork: the workers belong to the parent
-        for worker in idle:
-            if worker.is_ready():
-                worker.close()
-            else:
-                # Still importing unified-planning (it reads no input before that):
-                # waiting for it to see the closed input would delay our exit.
+        stopped = 0
+        try:
+            for worker in idle:
+                if worker.is_ready():
+                    worker.close()
+                else:
+                    # Still importing unified-planning (it reads no input before that):
+                    # waiting for it to see the closed input would delay our exit.
+                    worker.kill()
+                stopped += 1
+        except KeyboardInterrupt:
+            # Ctrl-C while a worker takes its time to exit: kill the rest (no waiting
+            # for them to exit on their own), then let the interrupt go on.
+            for worker in idle[stopped:]:
                 worker.kill()
+            raise
 
 
 _pool: WorkerPool | None = None
@@ -506,8 +515,22 @@ def default_pool() -> WorkerPool:
 
 
 def _close_default_pool() -> None:
-    if _pool is not None and _pool._pid == os.getpid():
+    """At exit: stop the default pool's workers.
+
+    A Ctrl-C meanwhile (the run has ended and said so; this is the process shutting
+    down) ends the process at once, quietly, with the status of an interrupt (130):
+    the workers were killed, and nothing is left to report.
+    """
+    if _pool is None or _pool._pid != os.getpid():
+        return
+    try:
         _pool.close()
+    except KeyboardInterrupt:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)  # a third Ctrl-C changes nothing
+        for stream in (sys.stdout, sys.stderr):
+            with contextlib.suppress(Exception):
+                stream.flush()
+        os._exit(130)
 
 
 def _forget_pool_after_fork() -> None:

@@ -45,13 +45,15 @@ def test_the_default_run_prints_steps_a_replan_with_its_reason_once_and_the_summ
     assert main(["run", str(FETCH)]) == 0
     lines = capsys.readouterr().err.splitlines()
     kinds = [line.split()[0] for line in lines]
-    assert set(kinds) <= {"plan-bridge", "[plan]", "step", "[replan]", "summary:"}
+    summary = kinds.index("summary:")
+    assert set(kinds[:summary]) <= {"plan-bridge", "[plan]", "step", "[replan]"}
     replans = [line for line in lines if line.startswith("[replan]")]
     assert len(replans) >= 1  # the default run shows what the project is for
     reason = replans[0].removeprefix("[replan] ")
     assert sum(reason in line for line in lines) == 1  # said once
-    assert lines[-1].startswith("summary: succeeded (goal reached)")
-    assert ", 0 faults injected" not in lines[-1]
+    assert lines[summary] == "summary: succeeded (goal reached)"
+    assert kinds[summary + 1 :] == ["actions:", "recovery:", "time:"]
+    assert "; 0 faults injected" not in lines[summary + 1]
     steps = [line for line in lines if line.startswith("  step ")]
     assert all(" -> " in line and line.endswith(" ms]") for line in steps)
 
@@ -77,3 +79,55 @@ def test_the_readme_shows_what_the_default_main_job_prints(
             continue
         # Each sample line is printed, in this order (lines between them may be elided).
         assert any(re.fullmatch(pattern(sample), line) for line in lines), sample
+
+
+def failed_steps_and_recover_lines(lines: list[str]) -> tuple[int, int]:
+    """(failed steps beyond the first of each plan run, `[recover]` lines)."""
+    beyond_first, failed = 0, 0
+    for line in [*lines, "[end]"]:
+        if line.startswith("  step "):
+            failed += line.split(" -> ")[1].split()[0] in ("aborted", "invalid")
+        elif line.startswith("[") and not line.startswith("[recover]"):
+            beyond_first += max(0, failed - 1)
+            failed = 0
+    return beyond_first, sum(line.startswith("[recover] ") for line in lines)
+
+
+@pytest.mark.timeout(120)
+def test_a_temporal_run_prints_planned_times_in_planned_start_order(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    target = str(ROOT / "domains" / "timed_courier")
+    assert main(["run", target, "--seed", "1", "--fail-rate", "0.3"]) == 0
+    lines = capsys.readouterr().err.splitlines()
+    plans = [line for line in lines if line.startswith("[plan] ")]
+    assert plans and all(", makespan " in line for line in plans)
+    run: list[tuple[int, float]] = []
+    for line in [*lines, "[end]"]:
+        step = re.fullmatch(
+            r"  step (\d+): \(.*\) planned at (\d+\.\d\d) s for \d+\.\d\d s -> .*", line
+        )
+        if line.startswith("  step ") and " -> invalid [" in line:
+            continue  # it did not start: no times
+        if line.startswith("  step "):
+            assert step is not None, line  # every step says when the plan starts it
+            run.append((int(step.group(1)), float(step.group(2))))
+        elif run:
+            # One plan run: in step order, which is the planned start order.
+            assert run == sorted(run) and [s for _, s in run] == sorted(s for _, s in run)
+            run = []
+    beyond_first, recovered = failed_steps_and_recover_lines(lines)
+    assert recovered == beyond_first
+
+
+@pytest.mark.timeout(120)
+@pytest.mark.parametrize("seed", [2, 7])
+def test_every_failed_step_of_a_concurrent_run_gets_its_own_recovery_line(
+    seed: int, capsys: pytest.CaptureFixture[str]
+) -> None:
+    target = str(ROOT / "domains" / "two_robot_delivery")
+    main(["run", target, "--concurrent", "--seed", str(seed), "--fail-rate", "0.5"])
+    lines = capsys.readouterr().err.splitlines()
+    beyond_first, recovered = failed_steps_and_recover_lines(lines)
+    assert recovered == beyond_first
+    assert all(" too: " in line for line in lines if line.startswith("[recover] "))

@@ -1,5 +1,7 @@
 ;; verdict: valid
 ;; plan: 0
+;; warning: the goal is empty
+;; warning-line: 11
 (define (problem deliver-one)
   (:domain courier)
   (:objects
