@@ -195,6 +195,7 @@ class AutoPlanner:
         atoms = None if goal is None else list(goal)
         tried: list[str] = []
         result: PlanResult | None = None
+        searched: PlanResult | None = None  # the last engine that searched and found none
         for number, engine in enumerate(engines):
             left = deadline - time.monotonic()
             if left <= 0.05 or (cancel is not None and cancel.is_set()):
@@ -211,9 +212,15 @@ class AutoPlanner:
             )
             if result.solved or _final(result):
                 break
+            if result.status is not PlanStatus.UNSUPPORTED:
+                searched = result
             tried.append(f"{engine}: {result.status.value}: {_first(result.explanation)}")
         if result is None:
             raise NoEngineError("no planner was tried: the time limit was already spent")
+        if result.status is PlanStatus.UNSUPPORTED and searched is not None:
+            # A later engine refusing the problem says nothing about it: the reason is
+            # what the engine that did search found (its refusal stays a note).
+            result = searched
         notes = [f"tried first: {line}" for line in tried if not line.startswith(result.planner)]
         return dataclasses.replace(
             result,

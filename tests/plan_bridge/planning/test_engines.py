@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -11,7 +12,7 @@ from plan_bridge.execution.semantics import ActionModel
 from plan_bridge.execution.world import WorldState
 from plan_bridge.pddl.task import PlanningTask, load_task
 from plan_bridge.planning.engines import AutoPlanner, engines_for, problem_kind
-from plan_bridge.planning.planner import PlanStatus, get_planner
+from plan_bridge.planning.planner import PlanResult, PlanStatus, get_planner
 
 ROOT = Path(__file__).resolve().parents[3]
 DATA = ROOT / "tests" / "plan_bridge" / "data"
@@ -98,3 +99,34 @@ def test_a_replan_from_a_belief_uses_its_numbers(patrol: PlanningTask) -> None:
     inspect = next(s for s in result.actions if s.action == "inspect")
     assert inspect.arguments == ("lamp", "yard")
     assert model.check_plan(result.actions, belief.facts).valid
+
+
+class _Answering:
+    """An engine that answers ``result`` without planning (for the portfolio's choice)."""
+
+    def __init__(self, result: PlanResult) -> None:
+        self.result = result
+
+    def solve(self, task: PlanningTask, **options: object) -> PlanResult:
+        return self.result
+
+
+def test_a_refusal_after_a_search_does_not_hide_what_the_search_found(
+    patrol: PlanningTask,
+) -> None:
+    searched = PlanResult(
+        PlanStatus.UNSOLVABLE, planner="kairos", explanation="kairos found no plan"
+    )
+    refused = PlanResult(
+        PlanStatus.UNSUPPORTED, planner="tamer", explanation="tamer cannot handle HIERARCHICAL"
+    )
+    answers = {"kairos": _Answering(searched), "tamer": _Answering(refused)}
+
+    class Portfolio(AutoPlanner):
+        def planner(self, engine: str) -> Any:
+            return answers[engine]
+
+    result = Portfolio(engines=["kairos", "tamer"]).solve(patrol, timeout=10)
+    assert result.status is PlanStatus.UNSOLVABLE
+    assert result.explanation == "kairos found no plan"
+    assert any(w.startswith("tried first: tamer") for w in result.warnings)
