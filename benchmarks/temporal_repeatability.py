@@ -10,10 +10,12 @@ Each (problem, seed) of ``domains/timed_courier`` is run ``--repeats`` times wit
 study worker has), at ``--time-scale`` 0 (as fast as it goes, the default of
 ``plan-bridge run``). A configuration *repeats* when every run gave the same outcome,
 faults, replans, retries, repairs and executed steps. Faults are drawn per step
-(seed, step, attempt), so what can differ is the order of two near-simultaneous
-events in the dispatcher's threads (which steps had started when one failed), and
-what follows from it. The script reports the share of configurations that repeat
-and the share whose goal-reached verdict differs between runs.
+(seed, step, attempt); what used to differ was the order of two near-simultaneous
+events in the dispatcher's threads (which steps had started when one failed). Since
+the dispatch takes turns on the world's simulated clock, every configuration should
+repeat; ``benchmarks/seed_repeatability.py`` checks it in fresh processes under load.
+The script reports the share of configurations that repeat and the share whose
+goal-reached verdict differs between runs.
 """
 
 from __future__ import annotations

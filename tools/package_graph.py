@@ -40,6 +40,7 @@ UNITS = (
     "plan_bridge.cli",
     "plan_bridge.study",
     "plan_bridge.ros",
+    "plan_bridge.robosim",
     "smach.introspection",
     "smach.ros",
     "smach_ros",
@@ -63,7 +64,7 @@ ALLOWED_CYCLES = {
     ),
 }
 #: Third-party packages drawn because the dependency direction is about them.
-EXTERNAL = ("unified_planning", "rclpy")
+EXTERNAL = ("unified_planning", "rclpy", "pyrobosim")
 
 #: The data flow: (producer unit, type, consumer unit).
 FLOWS: tuple[tuple[str, str, str], ...] = (
@@ -72,6 +73,7 @@ FLOWS: tuple[tuple[str, str, str], ...] = (
     ("plan_bridge.planning", "PlanResult", "plan_bridge.execution"),
     ("plan_bridge.skills", "SkillRegistry", "plan_bridge.execution"),
     ("plan_bridge.execution", "Executive", "plan_bridge.missions"),
+    ("plan_bridge.robosim", "RobosimWorld", "plan_bridge.missions"),
     ("smach.introspection", "Journal", "plan_bridge.missions"),
     ("plan_bridge.missions", "MissionSetup", "plan_bridge.cli"),
     ("plan_bridge.missions", "MissionOptions", "plan_bridge.cli"),

@@ -11,7 +11,11 @@ on how the two threads interleave:
 - the door that will be found blocked (at most one per run) is chosen when the
   world is made;
 - each robot keeps its own simulated clock; :attr:`sim_time` is the later of the
-  two (the mission's makespan) and faults are stamped with the robot's clock.
+  two (the mission's makespan) and faults are stamped with the robot's clock;
+- every activity of a robot also takes its time on the world's shared
+  :attr:`clock`, on which the steps of one plan layer take turns (in simulated-time
+  order, ties broken by step index): what the two robots see of each other (a door
+  found blocked, the belief their observations update) comes in one order.
 
 Faults (rates scale with ``fail_rate``; 0 means none), each recorded with
 :meth:`inject`:
@@ -94,13 +98,14 @@ class DeliveryWorld(SimulatedWorld):
         # The base class sets the time to 0 in __init__; the robots' clocks start at 0.
         pass
 
-    def clock(self, robot: str) -> float:
+    def robot_time(self, robot: str) -> float:
+        """The simulated seconds ``robot`` has spent so far (its own clock)."""
         with self._lock:
             return self._clock[robot]
 
     def _spend(self, robot: str, activity: str) -> None:
         self._clock[robot] += DURATIONS[activity]
-        self.elapse(DURATIONS[activity])  # each robot's own clock: paced per robot
+        self.elapse(DURATIONS[activity])  # the shared clock: turns, pacing
 
     def inject(
         self, kind: str, action: str, detail: str = "", *, robot: str | None = None

@@ -110,6 +110,12 @@ def add_input_arguments(parser: argparse.ArgumentParser, *, optional: bool = Fal
         help="problem file, or the name of one in the folder's problems/ (default: the "
         "folder's first); required with a domain .pddl",
     )
+    parser.add_argument(
+        "--goal",
+        metavar="GOAL",
+        help="for a pyrobosim world (TARGET is WORLD.yaml or a folder with world.yaml): the "
+        'goal in pyrobosim\'s vocabulary, e.g. "(At apple0 table0_tabletop)" (see docs/sim.md)',
+    )
 
 
 class InputError(ValueError):
@@ -123,6 +129,8 @@ class PddlInput:
     domain: Path
     problems: tuple[Path, ...]
     folder: Path | None = None
+    world: Path | None = None
+    """A pyrobosim world file: ``problems`` are its goals' names (or the file itself)."""
 
 
 def resolve_input(args: argparse.Namespace, *, every_problem: bool = False) -> PddlInput:
@@ -140,6 +148,9 @@ def resolve_input(args: argparse.Namespace, *, every_problem: bool = False) -> P
             )
         args.problem = positional
     target = Path(args.target)
+    world = _world_input(args, target, every_problem)
+    if world is not None:
+        return world
     if not target.exists():
         if target.suffix == ".pddl" or args.problem is not None:
             raise InputError(f"{target}: domain file not found; expected a PDDL domain file")
@@ -173,11 +184,38 @@ def resolve_input(args: argparse.Namespace, *, every_problem: bool = False) -> P
     return PddlInput(domain, (problem,), target)
 
 
+def _world_input(args: argparse.Namespace, target: Path, every_problem: bool) -> PddlInput | None:
+    """A pyrobosim world target (its goals are checked when it loads), else None."""
+    from plan_bridge.robosim.target_files import read_goals, world_file_of
+
+    world = world_file_of(target)
+    if world is None:
+        if getattr(args, "goal", None) is not None:
+            raise InputError(
+                f"{target}: --goal is for pyrobosim worlds (WORLD.yaml, or a folder with "
+                f"world.yaml); a PDDL target's goal is in its problem file"
+            )
+        return None
+    from plan_bridge.robosim.target_files import DOMAIN_PATH
+
+    goals = tuple(Path(name) for name in read_goals(target)) if target.is_dir() else ()
+    if getattr(args, "goal", None) is not None or not goals:
+        return PddlInput(DOMAIN_PATH, (world,), world.parent, world)
+    if args.problem is not None:
+        return PddlInput(DOMAIN_PATH, (Path(args.problem),), target, world)
+    return PddlInput(DOMAIN_PATH, goals if every_problem else goals[:1], target, world)
+
+
 def check_input(domain: Path, problem: Path) -> list[str]:
     """The front end's verdict on one domain and problem, the same for every command:
     raises :class:`~plan_bridge.errors.PddlError` (exit 2) for bad or unsupported
     input, including features whose engines are not installed; returns the warnings.
-    Imports no unified-planning."""
+    Imports no unified-planning. A pyrobosim world's problem is generated (and checked)
+    when the target loads: nothing to check here."""
+    from plan_bridge.robosim.target_files import DOMAIN_PATH
+
+    if domain == DOMAIN_PATH and problem.suffix != ".pddl":
+        return []
     from plan_bridge.pddl.front_end import analyse_files
 
     front = analyse_files(domain, problem)

@@ -65,12 +65,23 @@ def _run_plan(args: argparse.Namespace) -> int:
         progress(f"loading {domain} and {problem}...")
         # A planner process parses the task while we parse it (prime); the planner
         # name is checked before our parse, so a wrong one is reported at once.
-        task = load_task(
-            domain,
-            problem,
-            prime=default_pool(),
-            before_parse=lambda: planners.append(get_planner(args.planner)),
-        )
+        if chosen.world is not None:  # a pyrobosim world: the generated problem
+            from plan_bridge.missions.mission import load_target
+
+            task = load_target(
+                args.target,
+                problem,
+                goal=args.goal,
+                prime=default_pool(),
+                before_parse=lambda: planners.append(get_planner(args.planner)),
+            ).task
+        else:
+            task = load_task(
+                domain,
+                problem,
+                prime=default_pool(),
+                before_parse=lambda: planners.append(get_planner(args.planner)),
+            )
     except PlanBridgeError as exc:
         return fail(str(exc))
     planner = planners[0]

@@ -90,6 +90,12 @@ def _configure_run(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--journal", metavar="FILE", help="write every event as JSON lines to FILE")
     parser.add_argument(
+        "--events",
+        metavar="EVENTS.yaml",
+        help="with a pyrobosim world: changes of the world at simulated times (a hallway "
+        "closed, an object moved; see docs/sim.md)",
+    )
+    parser.add_argument(
         "--viewer",
         nargs="?",
         const=0,
@@ -285,6 +291,8 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
         args.problem,
         prime=default_pool(),
         before_parse=lambda: planners.append(get_planner(args.planner)),
+        goal=args.goal,
+        events=args.events,
     )
     default_scale = VIEWER_TIME_SCALE if args.viewer is not None else 0.0
     options = MissionOptions(
@@ -411,7 +419,7 @@ def _check(args: argparse.Namespace) -> int:
     for problem in chosen.problems:
         try:
             warnings = check_input(chosen.domain, problem)
-            loaded = load_target(args.target, problem)
+            loaded = load_target(args.target, problem, goal=args.goal)
             setup = loaded.setup(seed=0, fail_rate=0.0)
         except PlanBridgeError as exc:
             if single:

@@ -168,7 +168,7 @@ def _run(args: argparse.Namespace) -> int:
         domain, problem = chosen.domain, chosen.problems[0]
         for warning in check_input(domain, problem):
             progress(f"warning: {warning}")
-        listed = _list(args, chosen.folder, domain, problem)
+        listed = _list(args, chosen.folder, domain, problem, world=chosen.world is not None)
     except (InputError, PlanBridgeError) as exc:
         return fail(str(exc))
     name, skill_map, rows = listed
@@ -210,7 +210,12 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _list(
-    args: argparse.Namespace, folder: Path | None, domain: Path, problem: Path
+    args: argparse.Namespace,
+    folder: Path | None,
+    domain: Path,
+    problem: Path,
+    *,
+    world: bool = False,
 ) -> tuple[str, SkillMap | None, list[ActionBinding]]:
     """(target name, its skill map, the bindings) of the input."""
     from plan_bridge.skills.registry import SkillRegistry
@@ -219,7 +224,7 @@ def _list(
     has_python = folder is not None and any(
         (folder / entry).is_file() for entry in ("__init__.py", "skills.py")
     )
-    if not has_python:
+    if not has_python and not world:
         # Symbolic skills and the map only: the front end's actions suffice.
         from plan_bridge.pddl.front_end import analyse_files
         from plan_bridge.pddl.task import ActionSchema, Parameter
@@ -242,7 +247,7 @@ def _list(
 
     from plan_bridge.missions.mission import load_target
 
-    target = load_target(args.target, problem)
+    target = load_target(args.target, problem, goal=args.goal)
     setup = target.setup(seed=0, fail_rate=0.0)
     found = setup.extra.get("skill_map")
     package = target.module.__name__ if target.module is not None else ""

@@ -20,6 +20,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import smach
+from plan_bridge.execution.clock import SimClock, Ticket, clock_of
 from plan_bridge.execution.events import ObservationsApplied, StepFinished
 from plan_bridge.execution.semantics import ActionModel, GroundAction
 from plan_bridge.execution.world import (
@@ -38,6 +39,8 @@ from plan_bridge.skills.registry import (
     Skill,
     SkillRegistry,
 )
+from smach.concurrence import _Child as _ConcurrenceChild
+from smach.concurrence import _Run as _ConcurrenceRun
 from smach.introspection.events import stamp
 
 __all__ = ["CompiledPlan", "StepRecord", "StepState", "compile_plan", "step_label"]
@@ -285,13 +288,21 @@ def compile_plan(
         if len(layer) == 1:
             units.append((labels[layer[0]], states[layer[0]]))
             continue
-        group = smach.Concurrence(
-            outcomes=list(STEP_OUTCOMES),
-            default_outcome="succeeded",
-            outcome_cb=_layer_outcome,
-            input_keys=sorted({k for i in layer for k in states[i].get_registered_input_keys()}),
-            output_keys=sorted({k for i in layer for k in states[i].get_registered_output_keys()}),
-        )
+        input_keys = sorted({k for i in layer for k in states[i].get_registered_input_keys()})
+        output_keys = sorted({k for i in layer for k in states[i].get_registered_output_keys()})
+        clock = clock_of(world)
+        group: smach.Concurrence
+        if isinstance(clock, SimClock):
+            keys = {labels[i]: i for i in layer}
+            group = _TurnTakingLayer(clock, keys, input_keys, output_keys)
+        else:
+            group = smach.Concurrence(
+                outcomes=list(STEP_OUTCOMES),
+                default_outcome="succeeded",
+                outcome_cb=_layer_outcome,
+                input_keys=input_keys,
+                output_keys=output_keys,
+            )
         for i in layer:
             group.add(labels[i], states[i])
         units.append((f"{labels[layer[0]][:width]}_PARALLEL_{len(layer)}", group))
@@ -299,6 +310,52 @@ def compile_plan(
         following = units[n + 1][0] if n + 1 < len(units) else "succeeded"
         sm.add(label, unit, transitions={"succeeded": following})
     return CompiledPlan(sm, steps, labels, states, layers)
+
+
+class _TurnTakingLayer(smach.Concurrence):
+    """A layer of steps on a simulated world's clock: they run at once and take turns
+    on the clock (one at a time, in simulated-time order, ties broken by step index;
+    see :mod:`plan_bridge.execution.clock`), so what one robot's step changes in the
+    world or the belief reaches the other's in one order, run after run."""
+
+    def __init__(
+        self,
+        clock: SimClock,
+        keys: Mapping[str, int],
+        input_keys: Sequence[str],
+        output_keys: Sequence[str],
+    ) -> None:
+        super().__init__(
+            outcomes=list(STEP_OUTCOMES),
+            default_outcome="succeeded",
+            outcome_cb=_layer_outcome,
+            input_keys=input_keys,
+            output_keys=output_keys,
+        )
+        self.clock = clock
+        self.keys = dict(keys)
+        self._tickets: dict[str, Ticket] = {}
+
+    def _run(self) -> str | None:
+        clock = self.clock
+        if clock.taking_part():  # run by a thread that takes turns already: as it is
+            return super()._run()
+        # Every step's place in the order is taken before any of them starts.
+        self._tickets = {label: clock.admit(key) for label, key in self.keys.items()}
+        try:
+            return super()._run()
+        finally:
+            tickets, self._tickets = self._tickets, {}
+            for ticket in tickets.values():
+                clock.discard(ticket)
+
+    def _run_child(self, run: _ConcurrenceRun, child: _ConcurrenceChild) -> None:
+        ticket = self._tickets.get(child.label)
+        if ticket is None:
+            super()._run_child(run, child)
+            return
+        with self.clock.turn(ticket):
+            super()._run_child(run, child)
 
 
 def _layer_outcome(outcomes: dict[str, str | None]) -> str:

@@ -5,18 +5,25 @@ effects to it when the action succeeds, and fails (changing nothing) with probab
 ``fail_rate``, drawn from a seeded random generator. Either way it reports what it
 sees of the facts its action touches, so the executive's belief follows the world.
 This makes any PDDL domain executable without writing skills.
+
+Time belongs to the world: its :attr:`SimulatedWorld.clock` is a
+:class:`~plan_bridge.execution.clock.SimClock`, which its skills' activities move on
+(:meth:`SimulatedWorld.elapse`) without sleeping, unless a ``time_scale`` asks to pace
+it for a viewer. Steps that run at the same time (a temporal plan's dispatch, a
+Concurrence layer) take turns on it in simulated time, so a seeded run is a function of
+its seed (see :mod:`plan_bridge.execution.clock`).
 """
 
 from __future__ import annotations
 
 import random
 import threading
-import time
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import smach
+from plan_bridge.execution.clock import MAX_PACE_S, SimClock
 from plan_bridge.execution.semantics import ActionModel, GroundAction
 from plan_bridge.execution.snapshots import SnapshotError, decode, encode
 from plan_bridge.execution.world import FactSnapshot, Observation
@@ -41,8 +48,8 @@ class SimulatedWorld:
     """The true state of a simulated world, with seeded faults.
 
     Domain worlds subclass it: they keep the true PDDL facts in :attr:`_facts`
-    (under :attr:`_lock`), advance :attr:`sim_time` (simulated robot seconds) as the
-    robot acts, draw their faults with :meth:`chance` and record every fault they
+    (under :attr:`_lock`), advance :attr:`sim_time` (simulated robot seconds, the time
+    of :attr:`clock`) as the robot acts (``self.sim_time += 2.0``, or :meth:`elapse`), draw their faults with :meth:`chance` and record every fault they
     inject with :meth:`inject`, so that runs can be compared (``plan-bridge study``).
 
     Every attribute of a world is declared once, in one of three class attributes
@@ -67,10 +74,7 @@ class SimulatedWorld:
         "rng",
     )
     constant: ClassVar[tuple[str, ...]] = ("task", "model", "fail_rate", "variant")
-    wiring: ClassVar[tuple[str, ...]] = ("_lock", "time_scale")
-
-    #: Wall seconds per simulated second (``plan-bridge run --time-scale``); 0: no waiting.
-    time_scale: float = 0.0
+    wiring: ClassVar[tuple[str, ...]] = ("_lock", "clock")
 
     #: Simulated seconds one symbolic action takes.
     action_duration = 1.0
@@ -103,22 +107,60 @@ class SimulatedWorld:
         self.values: dict[str, float] = {
             format_fact(atom): value for atom, value in self.model.initial_values().items()
         }
-        self._lock = _PacedLock()
+        #: The world's time (:attr:`sim_time` is its reading).
+        self.clock = SimClock()
+        self._lock = _PacedLock(self.clock)
         self.faults: list[Fault] = []
-        self.sim_time = 0.0
         self.actions_run = 0
 
-    def __setattr__(self, name: str, value: Any) -> None:
-        if name == "sim_time" and self.time_scale > 0:
-            self.elapse(float(value) - float(self.sim_time))
-        object.__setattr__(self, name, value)
+    @property
+    def time_scale(self) -> float:
+        """Wall seconds per simulated second (``plan-bridge run --time-scale``): the
+        clock's pace; 0: no waiting."""
+        return self.clock.time_scale
+
+    @time_scale.setter
+    def time_scale(self, value: float) -> None:
+        if value < 0:
+            raise ValueError(f"time_scale must be 0 or more, got {value!r}")
+        self.clock.time_scale = float(value)
+
+    @property
+    def sim_time(self) -> float:
+        """Simulated seconds: the time of :attr:`clock`. Adding to it is an activity
+        of the calling thread that takes that long (:meth:`elapse`)."""
+        return self.clock.now()
+
+    @sim_time.setter
+    def sim_time(self, value: float) -> None:
+        seconds = float(value) - self.clock.now()
+        if seconds >= 0:
+            self.elapse(seconds)
+        else:
+            self.clock.reset(float(value))
 
     def elapse(self, seconds: float) -> None:
-        """Simulated ``seconds`` passed: with a :attr:`time_scale`, the calling thread
-        waits ``seconds x time_scale`` wall seconds, after it releases the world's lock
-        (worlds move their clocks with the lock held; other robots go on meanwhile)."""
-        if self.time_scale > 0 and seconds > 0:
-            self._lock.owe(seconds * self.time_scale)
+        """The calling thread's activity takes ``seconds`` of simulated time.
+
+        A step taking turns on the clock (a temporal dispatch, a Concurrence layer)
+        waits on the clock until it is that time, so the others act in between in
+        simulated-time order; any other thread moves the clock on at once. With a
+        :attr:`time_scale`, the wait is paced in wall time too. Called with the world's
+        lock held (worlds move their clocks under it), the wait happens when the thread
+        releases the lock, so other robots can use the world meanwhile.
+        """
+        if seconds <= 0:
+            return
+        clock = self.clock
+        if self._lock.held():
+            if not clock.taking_part():
+                clock.advance(seconds)  # now: what happens next under the lock sees it
+            self._lock.owe(seconds)
+        elif clock.taking_part():
+            clock.sleep(seconds)
+        else:
+            clock.advance(seconds)
+            clock.pace(seconds)
 
     @property
     def faults_injected(self) -> int:
@@ -185,7 +227,10 @@ class SimulatedWorld:
         values = {name: decode(data[name], name) for name in names}
         with self._lock:
             for name, value in values.items():
-                object.__setattr__(self, name, value)  # no pacing: nothing happens
+                if name == "sim_time":
+                    self.clock.reset(float(value))  # set, not advanced: nothing happens
+                else:
+                    object.__setattr__(self, name, value)
 
     def abandon_running(self) -> None:
         """Abandon the actions in progress (after :meth:`restore` into a new process,
@@ -294,27 +339,40 @@ class SimulatedWorld:
 
 
 class _PacedLock:
-    """The world's lock; a thread that owes wall time (:meth:`SimulatedWorld.elapse`)
-    waits when it releases the lock, so that other threads can use the world meanwhile."""
+    """The world's lock; a thread that spent simulated time while holding it
+    (:meth:`SimulatedWorld.elapse`) waits for it when it releases the lock, so that
+    other threads can use the world meanwhile."""
 
-    __slots__ = ("_local", "_lock")
+    __slots__ = ("_clock", "_local", "_lock")
 
-    def __init__(self) -> None:
+    def __init__(self, clock: SimClock) -> None:
+        self._clock = clock
         self._lock = threading.Lock()
         self._local = threading.local()
 
     def owe(self, seconds: float) -> None:
         self._local.debt = getattr(self._local, "debt", 0.0) + seconds
 
+    def held(self) -> bool:
+        """Whether the calling thread holds the lock (through ``with``)."""
+        return bool(getattr(self._local, "inside", False))
+
     def __enter__(self) -> bool:
-        return self._lock.acquire()
+        acquired = self._lock.acquire()
+        self._local.inside = True
+        return acquired
 
     def __exit__(self, *exc: object) -> None:
+        self._local.inside = False
         self._lock.release()
         debt = getattr(self._local, "debt", 0.0)
         if debt > 0:
             self._local.debt = 0.0
-            time.sleep(min(debt, MAX_WAIT))
+            clock = self._clock
+            if clock.taking_part():
+                clock.sleep(debt)  # its turn ends until the clock gets there
+            else:
+                clock.pace(debt)  # (the clock moved on when the time was spent)
 
     def acquire(self, blocking: bool = True, timeout: float = -1) -> bool:
         return self._lock.acquire(blocking, timeout)
@@ -326,7 +384,7 @@ class _PacedLock:
         return self._lock.locked()
 
 
-MAX_WAIT = 10.0
+MAX_WAIT = MAX_PACE_S
 """The longest wall wait of one paced activity, seconds (a long charge stays watchable)."""
 
 

@@ -19,6 +19,15 @@ may still change), and when nothing runs it starts anyway and reports ``invalid`
 So a late action delays its dependents instead of breaking them, and independent
 actions are not held up by it.
 
+**Whose clock.** The dispatcher follows a :class:`~plan_bridge.execution.clock.Clock`:
+the wall clock by default (a robot), or a simulated world's clock. On a simulated clock
+plan seconds are the clock's seconds: no step starts before its planned time, lags
+included (the clock's own ``time_scale`` paces it for a viewer, or it jumps), and the
+dispatcher and every step's thread take turns on it (one runs at a time; the next is
+the one due first in simulated time, ties broken by step index, the dispatcher
+first). Ends that fall at the same simulated instant are thus met in one order, and a
+seeded simulated run is a function of its seed.
+
 **While a step runs.** At-start effects (and numeric ones) reach the belief when it
 starts; its over-all conditions are checked on every change of the belief (a belief
 listener, no polling) and a violation preempts its skill: the step ends ``aborted``
@@ -34,9 +43,10 @@ moment its skill starts. (A door held open at the start of one step is open befo
 the step that passes through it begins, whichever thread runs first.)
 
 **When a step ends.** A step's end waits for the points planned before it of the
-steps it interferes with (:func:`end_precedence`): a door held for a robot passing
-through is not released before the robot is through, however quick the holding
-skill. The wait happens when the skill calls ``ud.end_ready()`` (a skill holding
+steps it interferes with, and for the end of an interfering step nested in it that is
+planned to end at the same instant (:func:`end_precedence`): a door held for a robot
+passing through is not released before the robot is through, however quick the
+holding skill. The wait happens when the skill calls ``ud.end_ready()`` (a skill holding
 something calls it before letting go) and in any case before the at-end effects
 reach the belief.
 
@@ -64,6 +74,7 @@ from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import smach
+from plan_bridge.execution.clock import WALL_CLOCK, Clock, Ticket, clock_of
 from plan_bridge.execution.compile import (
     STEP_OUTCOMES,
     CompiledPlan,
@@ -249,7 +260,8 @@ def end_precedence(
     steps: Sequence[PlanStep], model: ActionModel, prints: Sequence[Footprint] | None = None
 ) -> list[list[Edge]]:
     """For each step, the points its *end* waits for: the start and end points of the
-    interfering steps planned before its end (a light held for an inspection is not
+    interfering steps planned before its end, and the end of an interfering step that
+    began after it and is planned to end with it (a light held for an inspection is not
     switched off before the inspection ends, however quick the holding skill)."""
     prints = footprints(steps, model) if prints is None else prints
     starts = [step.start or 0.0 for step in steps]
@@ -261,8 +273,14 @@ def end_precedence(
             reads_j, writes_j = prints[j]
             if i == j or not (writes_i & (reads_j | writes_j) or writes_j & reads_i):
                 continue
+            nested = starts[j] > starts[i] + EPSILON  # j began while i was under way
             for point, at in (("start", starts[j]), ("end", ends[j])):
-                if at < ends[i] - EPSILON and (point == "end" or starts[j] > starts[i] + EPSILON):
+                before = at < ends[i] - EPSILON and (point == "end" or nested)
+                # A step nested in this one and planned to end at the same instant ends
+                # first (PDDL's over-all conditions need not hold at the end point): the
+                # door is let go once the robot passing through is through.
+                together = point == "end" and nested and at <= ends[i] + EPSILON
+                if before or together:
                     waits[i].append(Edge(j, i, point, 0.0))
     return waits
 
@@ -563,7 +581,15 @@ class TemporalDispatch(smach.Container):
 
     Outcomes: ``succeeded`` when every step succeeded, else the first failing step's
     outcome (``aborted``, ``invalid``, ``preempted``).
+
+    ``clock``: the time the dispatch follows (default: the wall clock). On a simulated
+    clock (a simulated world's), plan seconds are its seconds, ``time_scale`` is only
+    reported (the clock paces itself), and the dispatcher and the steps' threads take
+    turns on it in simulated-time order.
     """
+
+    #: The dispatcher's key in its clock's order: before the steps (keys 0, 1, ...).
+    DISPATCHER_KEY = -1
 
     def __init__(
         self,
@@ -575,6 +601,7 @@ class TemporalDispatch(smach.Container):
         *,
         time_scale: float = 0.0,
         on_failure: str = "finish",
+        clock: Clock | None = None,
     ) -> None:
         if on_failure not in POLICIES:
             raise ValueError(f"on_failure must be one of {', '.join(POLICIES)}, got {on_failure!r}")
@@ -588,6 +615,9 @@ class TemporalDispatch(smach.Container):
         self.belief = belief
         self.time_scale = time_scale
         self.on_failure = on_failure
+        self.clock = WALL_CLOCK if clock is None else clock
+        #: Clock seconds per plan second: 1 on a simulated clock, else ``time_scale``.
+        self.clock_per_plan_s = 1.0 if self.clock.simulated else time_scale
         origin = min((s.start or 0.0 for s in self.steps), default=0.0)
         self.planned_start = [(s.start or 0.0) - origin for s in self.steps]
         prints = footprints(self.steps, model)
@@ -602,7 +632,7 @@ class TemporalDispatch(smach.Container):
             self._states[label] = state
         self._remappers: dict[str, smach.Remapper] = {}
         self._run_state: _Dispatch | None = None
-        self._wake = threading.Condition()
+        self._wake = self.clock.condition()
 
     def settled_facts(self) -> frozenset[Fact]:
         """The belief's facts with the at-start changes of the steps in progress undone.
@@ -692,10 +722,15 @@ class TemporalDispatch(smach.Container):
 
     # -- execution -------------------------------------------------------------------------
     def _run(self) -> str | None:
-        run = _Dispatch(t0=time.monotonic(), waiting=list(range(len(self.steps))))
+        clock = self.clock
+        with clock.turn(clock.admit(self.DISPATCHER_KEY)):
+            return self._run_dispatch()
 
-        def since_start(t0: float = run.t0) -> float:
-            return time.monotonic() - t0
+    def _run_dispatch(self) -> str | None:
+        run = _Dispatch(t0=self.clock.now(), waiting=list(range(len(self.steps))))
+
+        def since_start(t0: float = time.monotonic()) -> float:
+            return time.monotonic() - t0  # (wall seconds: the viewer's timeline)
 
         for index, state in enumerate(self._states.values()):
             state.clock = since_start
@@ -736,14 +771,14 @@ class TemporalDispatch(smach.Container):
                     if i not in run.holding:
                         run.holding.add(i)
                         self._wake.notify_all()  # the loop looks whether all are held
-                    self._wake.wait()
+                    self._wake.wait_until(None)
             finally:
                 run.holding.discard(i)
 
     def _begun(self, run: _Dispatch, i: int) -> None:
         """Step ``i``'s start point happened (its skill began its action)."""
         with self._wake:
-            run.started.setdefault(i, time.monotonic())
+            run.started.setdefault(i, self.clock.now())
             self._wake.notify_all()
 
     def _poke(self) -> None:
@@ -769,22 +804,22 @@ class TemporalDispatch(smach.Container):
                         run.failure = "aborted"
                         return
                     continue
-                timeout = None if due is None else max(0.0, due - time.monotonic())
-                self._wake.wait(timeout)
+                self._wake.wait_until(due)
 
     def _ready_at(self, run: _Dispatch, j: int) -> float | None:
-        """Wall time when step ``j`` may start, None while a predecessor has not happened."""
-        at = run.t0 + self.planned_start[j] * self.time_scale if self.time_scale > 0 else 0.0
+        """Clock time when step ``j`` may start, None while a predecessor has not happened."""
+        scale = self.clock_per_plan_s
+        at = run.t0 + self.planned_start[j] * scale
         for edge in self.waits[j]:
             happened = (run.started if edge.point == "start" else run.ended).get(edge.before)
             if happened is None:
                 return None
-            at = max(at, happened + edge.lag * self.time_scale)
+            at = max(at, happened + edge.lag * scale)
         return at
 
     def _start_ready(self, run: _Dispatch) -> float | None:
         """Start every step that is ready; return when the next one is due (or None)."""
-        now = time.monotonic()
+        now = self.clock.now()
         due: float | None = None
         facts = self.belief.facts
         for j in list(run.waiting):
@@ -807,20 +842,30 @@ class TemporalDispatch(smach.Container):
                 self._launch(run, j)
                 # Started by force: its start point is now (it will report why it
                 # cannot run), and the steps planned with it may go ahead.
-                run.started.setdefault(j, time.monotonic())
+                run.started.setdefault(j, self.clock.now())
                 return True
         return False
 
     def _launch(self, run: _Dispatch, j: int) -> None:
         run.waiting.remove(j)  # its start point is when its skill begins (_begun)
         label = self.labels[j]
+        # Its place in the clock's order is taken now, before this thread can wait.
+        ticket = self.clock.admit(j)
         thread = threading.Thread(
-            target=self._run_child, args=(run, j), name=f"dispatch-{label}", daemon=True
+            target=self._run_child, args=(run, j, ticket), name=f"dispatch-{label}", daemon=True
         )
         run.running[j] = thread
-        thread.start()
+        try:
+            thread.start()
+        except BaseException:
+            self.clock.discard(ticket)
+            raise
 
-    def _run_child(self, run: _Dispatch, j: int) -> None:
+    def _run_child(self, run: _Dispatch, j: int, ticket: Ticket) -> None:
+        with self.clock.turn(ticket):
+            self._run_step(run, j)
+
+    def _run_step(self, run: _Dispatch, j: int) -> None:
         label = self.labels[j]
         state = self._states[label]
         outcome = "aborted"
@@ -833,7 +878,7 @@ class TemporalDispatch(smach.Container):
                 run.errors.append(exc)
         with self._wake:
             run.running.pop(j, None)
-            run.ended[j] = time.monotonic()
+            run.ended[j] = self.clock.now()
             run.started.setdefault(j, run.ended[j])  # a step that ended before it began
             run.outcomes[j] = outcome
             if outcome != "succeeded":
@@ -870,9 +915,11 @@ def compile_temporal(
     time_scale: float = 0.0,
     on_failure: str = "finish",
     world: World | None = None,
+    clock: Clock | None = None,
 ) -> CompiledPlan:
     """A temporal plan as a :class:`TemporalDispatch` of :class:`TimedStepState` steps
-    (labels as for sequential plans: ``03_NAVIGATE_R1_DOCK_HALL``)."""
+    (labels as for sequential plans: ``03_NAVIGATE_R1_DOCK_HALL``). The dispatch follows
+    ``clock``, by default the clock of ``world`` (the wall clock without one)."""
     steps = list(steps)
     width = max(2, len(str(first_index + len(steps))))
     labels = [step_label(first_index + i, s, width) for i, s in enumerate(steps)]
@@ -891,7 +938,14 @@ def compile_temporal(
         state.add("SKILL", skill_state)
         states.append(state)
     dispatch = TemporalDispatch(
-        steps, states, labels, model, belief, time_scale=time_scale, on_failure=on_failure
+        steps,
+        states,
+        labels,
+        model,
+        belief,
+        time_scale=time_scale,
+        on_failure=on_failure,
+        clock=clock_of(world) if clock is None else clock,
     )
     return CompiledPlan(
         dispatch,

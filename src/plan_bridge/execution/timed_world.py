@@ -5,9 +5,9 @@ A :class:`TimedSkill` plays one durative action against it: the at-start conditi
 are checked (not yet the over-all ones: an action planned to start with the one that
 establishes them may begin a moment earlier) and the at-start effects applied when it
 starts, the action lasts its
-duration (times :attr:`TimedWorld.time_scale` wall seconds per plan second, checking
-for a preempt every few milliseconds), then the over-all and at-end conditions are
-checked on the true world and the at-end effects applied. It reports what it saw of
+duration on the world's simulated clock (:attr:`TimedWorld.clock`: no wall time unless
+a ``time_scale`` paces it; a preempt ends the wait at once), then the over-all and
+at-end conditions are checked on the true world and the at-end effects applied. It reports what it saw of
 the atoms and numbers the action touches (numbers as numeric observations).
 
 Faults, each with probability ``fail_rate x fault_scale[kind]``:
@@ -24,6 +24,11 @@ seed, the step and how many times it began before: two robots' steps that start 
 the same moment draw the same faults whichever thread comes first, so a seeded run
 meets the same faults on the same steps every time.
 
+Steps dispatched together take turns on the clock (see
+:mod:`plan_bridge.execution.clock`): they begin, end and meet the world in the order of
+their simulated times, ties broken by step index, so a seeded run of a temporal plan
+is the same run every time, whatever the threads do.
+
 Instantaneous actions of a temporal domain run as plain symbolic steps.
 """
 
@@ -31,7 +36,6 @@ from __future__ import annotations
 
 import random
 import threading
-import time
 from collections.abc import Mapping
 from typing import Any, ClassVar
 
@@ -46,7 +50,6 @@ from plan_bridge.skills.registry import SkillRegistry
 __all__ = ["TimedSkill", "TimedWorld", "timed_skills"]
 
 Reading = tuple[Fact, "bool | float"]
-_SLICE_S = 0.005
 
 
 class TimedWorld(SimulatedWorld):
@@ -198,7 +201,7 @@ class TimedSkill(smach.State):
             duration *= 2.0
         if "halfway" in faults:
             duration /= 2.0
-        if not self._wait(duration * self.world.time_scale):
+        if not self._wait(duration):
             self.world.abandon(self.step)
             ud.observations = self.world.readings(ground)
             self.service_preempt()
@@ -210,16 +213,8 @@ class TimedSkill(smach.State):
         return "succeeded" if ok else "aborted"
 
     def _wait(self, seconds: float) -> bool:
-        """Wait ``seconds`` (wall); False when preempted meanwhile."""
-        deadline = time.monotonic() + seconds
-        event = threading.Event()
-        while True:
-            if self.preempt_requested():
-                return False
-            left = deadline - time.monotonic()
-            if left <= 0:
-                return True
-            event.wait(min(left, _SLICE_S))
+        """Let ``seconds`` of simulated time pass; False when preempted meanwhile."""
+        return self.world.clock.sleep(seconds, self.preempt_requested)
 
 
 def timed_skills(world: TimedWorld, registry: SkillRegistry | None = None) -> SkillRegistry:

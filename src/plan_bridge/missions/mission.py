@@ -151,13 +151,38 @@ def load_target(
     *,
     prime: WorkerPool | None = None,
     before_parse: Callable[[], object] | None = None,
+    goal: str | None = None,
+    events: str | Path | None = None,
 ) -> Target:
-    """Load a domain folder or a domain.pddl (then ``problem`` is required).
+    """Load a domain folder or a domain.pddl (then ``problem`` is required), or a
+    pyrobosim world (``WORLD.yaml`` or a folder with ``world.yaml``: ``goal``, or a
+    goal of its goals.yaml named by ``problem``; ``events``: an events file; see
+    :mod:`plan_bridge.missions.world_target`).
 
     ``prime`` (a planner worker pool that parses the task in parallel) and
     ``before_parse`` are those of :func:`~plan_bridge.pddl.task.load_task`.
     """
+    from plan_bridge.robosim.target_files import world_file_of
+
     path = Path(target)
+    world_file = world_file_of(path)
+    if world_file is not None:
+        from plan_bridge.missions.world_target import load_world_target
+
+        return load_world_target(
+            path,
+            world_file,
+            problem,
+            goal=goal,
+            events=events,
+            prime=prime,
+            before_parse=before_parse,
+        )
+    if goal is not None or events is not None:
+        raise TargetError(
+            f"{path}: --goal and --events are for pyrobosim worlds (WORLD.yaml, or a folder with "
+            f"world.yaml); a PDDL target's goal is in its problem file"
+        )
     if not path.exists():
         raise TargetError(
             f"{path}: no such file or folder; expected a domain folder (with domain.pddl and "

@@ -27,6 +27,7 @@ def test_every_subcommand_is_in_the_table() -> None:
     assert set(commands()) == {
         "run",
         "check",
+        "problem",
         "control",
         "plan",
         "skills",

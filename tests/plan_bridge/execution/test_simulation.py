@@ -276,20 +276,26 @@ def test_a_world_restored_mid_mission_ends_as_the_world_that_was_never_stopped(
 def test_a_world_with_a_time_scale_waits_after_releasing_its_lock(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    from plan_bridge.execution import simulation
+    from plan_bridge.execution import clock
     from plan_bridge.planning.planner import PlanStep
 
     world = SimulatedWorld(rooms())
     waits: list[tuple[float, bool]] = []
-    monkeypatch.setattr(simulation.time, "sleep", lambda s: waits.append((s, world._lock.locked())))
+    monkeypatch.setattr(clock.time, "sleep", lambda s: waits.append((s, world._lock.locked())))
     step = PlanStep("move", ("r1", "kitchen", "hall"))
     world.perform(step)
     assert waits == []  # no time scale: as fast as it goes
+    assert world.sim_time == world.action_duration  # the world's clock moved on
     world.time_scale = 0.25
+    assert world.clock.time_scale == 0.25
     world.perform(step)
     assert waits == [(0.25 * world.action_duration, False)]
-    world.restore(world.snapshot())  # putting a state back takes no time
-    assert len(waits) == 1
+    assert world.sim_time == 2 * world.action_duration
+    saved = world.snapshot()
+    world.perform(step)
+    world.restore(saved)  # putting a state back takes no time, and sets the clock back
+    assert len(waits) == 2
+    assert world.sim_time == 2 * world.action_duration
 
 
 def test_a_numeric_domain_runs_in_the_simulated_world_with_its_numbers() -> None:

@@ -327,3 +327,20 @@ def test_a_step_is_not_started_on_what_a_failed_step_observed() -> None:
         assert outcome == "aborted"
         assert ("ready", "r") in belief.facts  # the observation was kept
     assert started == []  # but follow never started
+
+
+COURIER = Path(__file__).resolve().parents[3] / "domains" / "timed_courier"
+
+
+def test_a_held_door_planned_to_close_as_the_robot_arrives_waits_for_the_robot() -> None:
+    # Kairos plans the hold and the pass it covers to end at the same instant (PDDL's
+    # over-all conditions need not hold at the end point); letting go first would
+    # make the pass fail every time on a simulated clock, where ties are by index.
+    task = load_task(COURIER / "domain.pddl", COURIER / "problems" / "p01.pddl")
+    plan = [
+        PlanStep("hold-door", ("helper", "hall", "lab"), 46.004, 5.0),
+        PlanStep("pass-door", ("courier", "hall", "lab"), 48.004, 3.0),
+    ]
+    waits = end_precedence(plan, ActionModel(task))
+    assert {(edge.before, edge.point) for edge in waits[0]} == {(1, "start"), (1, "end")}
+    assert waits[1] == []  # the pass does not wait for the door to close

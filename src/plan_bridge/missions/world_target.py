@@ -1,0 +1,142 @@
+"""pyrobosim worlds as run targets: the generated task, the world and its skills.
+
+:func:`load_world_target` is what :func:`~plan_bridge.missions.mission.load_target`
+does for a world file (``WORLD.yaml``) or a world folder (``world.yaml``, optionally
+``goals.yaml``): it loads the world, checks the goal against its names, writes the
+problem of the robosim domain and loads it as the task. The target's setup gives a
+:class:`~plan_bridge.robosim.world.RobosimWorld` and its skills, so
+:func:`~plan_bridge.missions.runner.prepare_mission` runs it like any other target.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from plan_bridge.errors import PlanBridgeError
+from plan_bridge.missions.mission import MissionSetup, Target, TargetError
+from plan_bridge.pddl.constructs import did_you_mean
+from plan_bridge.pddl.task import load_task_from_text
+from plan_bridge.robosim.events import WorldEvent, check_events, load_events
+from plan_bridge.robosim.target_files import read_goals
+
+if TYPE_CHECKING:
+    from plan_bridge.planning.worker import WorkerPool
+
+__all__ = ["WorldTarget", "load_world_target"]
+
+
+@dataclass
+class WorldTarget(Target):
+    """A pyrobosim world with a goal (see :func:`load_world_target`)."""
+
+    world_file: Path = Path()
+    goal_text: str = ""
+    goal_name: str = ""
+    problem_text: str = ""
+    events: list[WorldEvent] = field(default_factory=list)
+    goal_names: tuple[str, ...] = ()
+
+    @property
+    def problems(self) -> list[Path]:
+        return [Path(name) for name in self.goal_names] or [self.world_file]
+
+    @property
+    def skill_map_path(self) -> Path | None:
+        return None
+
+    @property
+    def has_own_skills(self) -> bool:
+        return True
+
+    def setup(self, *, seed: int, fail_rate: float, variant: str = "") -> MissionSetup:
+        from plan_bridge.robosim.skills import robosim_skills
+        from plan_bridge.robosim.world import RobosimWorld
+
+        if variant:
+            raise TargetError(f"{self.world_file}: a pyrobosim world has no variants")
+        world = RobosimWorld(
+            self.world_file,
+            self.task.goal_facts,
+            seed=seed,
+            fail_rate=fail_rate,
+            events=self.events,
+        )
+        return MissionSetup(skills=robosim_skills(world), world=world)
+
+
+def load_world_target(
+    target: Path,
+    world_file: Path,
+    problem: str | Path | None = None,
+    *,
+    goal: str | None = None,
+    events: str | Path | None = None,
+    prime: WorkerPool | None = None,
+    before_parse: Callable[[], object] | None = None,
+) -> WorldTarget:
+    """The target of a world file or folder: the goal is ``goal``, else the folder's
+    goal named ``problem`` (or its first). Raises :class:`TargetError` and
+    :class:`~plan_bridge.robosim.problem.GoalError` with what is wrong and allowed."""
+    from plan_bridge.robosim.loading import load_world_file
+    from plan_bridge.robosim.problem import DOMAIN_PATH, describe_world, parse_goal, problem_text
+
+    folder = target if target.is_dir() else None
+    goals = read_goals(folder) if folder is not None else {}
+    name = str(problem) if problem is not None and Path(problem) != world_file else ""
+    if goal is None:
+        if not goals:
+            raise TargetError(
+                f'{target}: give the goal with --goal, e.g. --goal "(At apple0 table0_tabletop)" '
+                f"(a world folder may list named goals in goals.yaml)"
+            )
+        if name and Path(name).name not in goals:
+            hint = did_you_mean(Path(name).name, goals)
+            raise TargetError(
+                f"{name}: no such goal in {folder}/goals.yaml{hint}; goals: {', '.join(goals)}"
+            )
+        name = Path(name).name if name else next(iter(goals))
+        goal = goals[name]
+    sim = load_world_file(world_file)
+    try:
+        model = describe_world(sim, str(world_file))
+        atoms = parse_goal(goal, model)
+        scheduled = load_events(events) if events is not None else []
+        check_events(
+            scheduled,
+            model.gates,
+            model.items,
+            [s.name for s in model.spots.values() if s.kind == "spawn"],
+        )
+    finally:
+        for robot in sim.robots:
+            robot.stop_sensor_threads()
+    text = problem_text(model, atoms, name or None)
+    try:
+        task = load_task_from_text(
+            DOMAIN_PATH.read_text(encoding="utf-8"),
+            text,
+            domain_name=str(DOMAIN_PATH),
+            problem_name=f"{world_file} (generated)",
+            prime=prime,
+            before_parse=before_parse,
+        )
+    except PlanBridgeError as exc:
+        raise TargetError(f"{world_file}: the generated problem does not load: {exc}") from exc
+    label = folder.name if folder is not None else world_file.stem
+    return WorldTarget(
+        label,
+        DOMAIN_PATH,
+        world_file,
+        task,
+        folder,
+        None,
+        world_file=world_file,
+        goal_text=goal,
+        goal_name=name,
+        problem_text=text,
+        events=scheduled,
+        goal_names=tuple(goals),
+    )

@@ -1,0 +1,206 @@
+"""What a :class:`~.world.RobosimWorld` does outside its own skills: take what a user's
+skill did into the pyrobosim world (:func:`adopt_step`), and save and restore the
+world for checkpoints (:func:`snapshot_world`, :func:`restore_world`)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
+from plan_bridge.execution.snapshots import SnapshotError
+from plan_bridge.execution.world import Observation
+from plan_bridge.robosim.world import RobosimWorld
+
+if TYPE_CHECKING:
+    from plan_bridge.planning.planner import PlanStep
+
+__all__ = ["adopt_step", "restore_world", "snapshot_world"]
+
+
+def _pose(x: float, y: float, yaw: float = 0.0) -> Any:
+    from pyrobosim.utils.pose import Pose
+
+    return Pose(x=x, y=y, yaw=yaw)
+
+
+def _put_robot(world: RobosimWorld, robot: Any, spot_name: str) -> None:
+    """Stand ``robot`` at a spot's navigation pose (what a user's drive did)."""
+    import copy
+
+    spot = world.model.spots[spot_name]
+    if spot.kind == "door":
+        hall = world.sim.get_hallway_by_name(spot.gate)
+        pose = min(hall.nav_poses, key=lambda p: abs(p.x - spot.x) + abs(p.y - spot.y))
+    else:
+        pose = world.sim.get_entity_by_name(spot.name).nav_poses[0]
+    robot.set_pose(copy.deepcopy(pose))
+    held = robot.manipulated_object
+    if held is not None:
+        held.set_pose(robot.get_pose())
+
+
+def _put_object(world: RobosimWorld, name: str, spawn_name: str) -> None:
+    obj = world.sim.get_object_by_name(name)
+    for robot in world.sim.robots:
+        if robot.manipulated_object is obj:
+            robot.manipulated_object = None
+    world.sim.update_object(obj, loc=spawn_name)
+
+
+def _set_gate(world: RobosimWorld, name: str, is_open: bool | None, locked: bool | None) -> None:
+    entity = world.sim.get_entity_by_name(name)
+    if locked is False or (is_open is not None and locked is None and entity.is_locked):
+        entity.is_locked = False
+    if is_open is not None and bool(entity.is_open) != is_open:
+        entity.set_open(is_open, recursive=True)
+        world.sim.update_polygons()
+        for robot in world.sim.robots:
+            robot.update_polygons()
+    if locked:
+        entity.is_locked = True
+
+
+def adopt_step(world: RobosimWorld, step: PlanStep, observations: Sequence[Observation]) -> None:
+    """Make the pyrobosim world agree with a step a user's skill did, then with its
+    observations (robot and object places, holding, open/locked, battery)."""
+    args = [world.name(a) for a in step.arguments]
+    action = step.action.lower()
+    if action in ("navigate", "cross"):
+        robot = world.robot(args[0])
+        before = world.spot_of(robot)
+        _put_robot(world, robot, args[2])
+        drained = world.model.distance(before, args[2]) if before in world.model.spots else 0.0
+        info = next(r for r in world.model.robots if r.name == robot.name)
+        robot.battery_level = max(0.0, float(robot.battery_level) - info.drain * drained)
+        world.distance_m += drained
+    elif action == "pick":
+        robot, obj = world.robot(args[0]), world.sim.get_object_by_name(args[1])
+        robot._attach_object(obj)
+    elif action == "place":
+        robot = world.robot(args[0])
+        held = robot.manipulated_object
+        if held is not None:
+            _put_object(world, held.name, args[2])
+    elif action in ("open", "close"):
+        _set_gate(world, args[1], action == "open", None)
+    elif action == "detect":
+        world.searched.add(args[1])
+    elif action == "charge":
+        world.robot(args[0]).battery_level = 100.0
+    for fact, value in observations:
+        _adopt_observation(world, fact, value)
+    world.sim.mark_changed()
+
+
+def _adopt_observation(world: RobosimWorld, fact: tuple[str, ...], value: bool | float) -> None:
+    name, *raw = fact
+    args = [world.name(a) for a in raw]
+    if name == "battery-level" and not isinstance(value, bool):
+        world.robot(args[0]).battery_level = float(value)
+    elif name in ("isopen", "islocked") and isinstance(value, bool):
+        _set_gate(
+            world,
+            args[0],
+            value if name == "isopen" else None,
+            value if name == "islocked" else None,
+        )
+    elif name == "at" and value is True:
+        robot = world.robots.get(args[0].lower())
+        if robot is not None:
+            _put_robot(world, robot, args[1])
+        elif args[1] in world.model.spots and world.model.spots[args[1]].kind == "spawn":
+            _put_object(world, args[0], args[1])
+    elif name == "holding" and value is True:
+        world.robot(args[0])._attach_object(world.sim.get_object_by_name(args[1]))
+    elif name == "searched" and isinstance(value, bool):
+        (world.searched.add if value else world.searched.discard)(args[0])
+
+
+def snapshot_world(world: RobosimWorld) -> dict[str, Any]:
+    """The world's state as JSON data: robots, objects, gates, clock, faults, events."""
+    robots = []
+    for robot in world.sim.robots:
+        pose = robot.get_pose()
+        held = robot.manipulated_object
+        robots.append(
+            {
+                "name": robot.name,
+                "pose": [float(pose.x), float(pose.y), float(pose.get_yaw())],
+                "battery": float(robot.battery_level),
+                "holding": held.name if held is not None else None,
+            }
+        )
+    objects = []
+    for obj in world.sim.objects:
+        pose = obj.pose
+        objects.append(
+            {
+                "name": obj.name,
+                "parent": obj.parent.name if obj.parent is not None else None,
+                "pose": [float(pose.x), float(pose.y), float(pose.get_yaw())],
+            }
+        )
+    gates = {
+        name: [bool(entity.is_open), bool(entity.is_locked)]
+        for name in world.model.gates
+        for entity in [world.sim.get_entity_by_name(name)]
+    }
+    options = {
+        f"{robot}/{action}": option.rng.bit_generator.state
+        for (robot, action), option in world._options.items()
+    }
+    return {
+        "kind": "robosim",
+        "world": str(world.path),
+        "time": world.now(),
+        "actions_run": world.actions_run,
+        "faults": world.faults,
+        "distance_m": world.distance_m,
+        "searched": sorted(world.searched),
+        "changes": list(world.changes),
+        "pending": [event.to_json() | {"origin": event.origin} for event in world._pending],
+        "robots": robots,
+        "objects": objects,
+        "gates": gates,
+        "rng": options,
+    }
+
+
+def restore_world(world: RobosimWorld, data: dict[str, Any]) -> None:
+    """Put a :func:`snapshot_world` back (the same world file)."""
+    from plan_bridge.robosim.events import parse_events
+
+    if data.get("kind") != "robosim":
+        raise SnapshotError("not a snapshot of a pyrobosim world (a checkpoint of another world)")
+    for name, (is_open, locked) in data["gates"].items():
+        _set_gate(world, name, bool(is_open), bool(locked))
+    held = {}
+    for entry in data["robots"]:
+        robot = world.robot(entry["name"])
+        robot.manipulated_object = None
+        x, y, yaw = entry["pose"]
+        robot.set_pose(_pose(x, y, yaw))
+        robot.battery_level = float(entry["battery"])
+        if entry["holding"]:
+            held[entry["holding"]] = robot
+    for entry in data["objects"]:
+        if entry["name"] in held:
+            continue
+        x, y, yaw = entry["pose"]
+        world.sim.update_object(entry["name"], loc=entry["parent"], pose=_pose(x, y, yaw))
+    for name, robot in held.items():
+        robot._attach_object(world.sim.get_object_by_name(name))
+    for key, state in data["rng"].items():
+        robot_name, action = key.split("/", 1)
+        world._options[(robot_name, action)].rng.bit_generator.state = state
+    world.clock.reset(float(data["time"]))
+    world.actions_run = int(data["actions_run"])
+    world.faults = int(data["faults"])
+    world.distance_m = float(data["distance_m"])
+    world.searched = set(data["searched"])
+    world.changes = list(data["changes"])
+    pending = data["pending"]
+    world._pending = parse_events(
+        [{k: v for k, v in e.items() if k != "origin"} for e in pending], "checkpoint"
+    )
+    world.sim.mark_changed()

@@ -1,0 +1,152 @@
+"""Changes of a pyrobosim world that nobody in the mission makes: a door closed, an
+object moved. Each happens at a simulated time (seconds since the mission started).
+
+An events file is a YAML list::
+
+    - at: 4.0              # simulated seconds since the mission started
+      close: hall_kitchen_pantry   # open, close, lock or unlock: a hallway or a location
+    - at: 20
+      move: apple0         # an object ...
+      to: table0_tabletop  # ... onto an object spawn (or a location)
+
+:func:`load_events` reads one (errors name the file, the item and its line, and what
+is allowed); :meth:`~plan_bridge.robosim.world.RobosimWorld.schedule` takes events from
+Python. The world applies an event when its clock passes ``at`` (see docs/sim.md).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from plan_bridge.errors import PlanBridgeError
+from plan_bridge.pddl.constructs import did_you_mean
+
+__all__ = ["KINDS", "EventError", "WorldEvent", "check_events", "load_events", "parse_events"]
+
+#: What an event does: the key that names it in an events file.
+KINDS = ("open", "close", "lock", "unlock", "move")
+_ALLOWED = (
+    "each item is a mapping with at: SECONDS and one of open: NAME, close: NAME, lock: NAME, "
+    "unlock: NAME (a hallway or location) or move: OBJECT with to: SPAWN"
+)
+
+
+class EventError(PlanBridgeError):
+    """An events file or event that is malformed or names nothing in the world."""
+
+
+@dataclass(frozen=True)
+class WorldEvent:
+    """One change of the world at simulated time ``at``."""
+
+    at: float
+    kind: str
+    target: str
+    to: str | None = None
+    origin: str = ""
+    """Where it was written (``events.yaml:3``), for messages."""
+
+    def describe(self) -> str:
+        where = f" to {self.to}" if self.to else ""
+        return f"{self.kind} {self.target}{where} at {self.at:g} s"
+
+    def to_json(self) -> dict[str, Any]:
+        data: dict[str, Any] = {"at": self.at, self.kind: self.target}
+        if self.to is not None:
+            data["to"] = self.to
+        return data
+
+
+def load_events(path: str | Path) -> list[WorldEvent]:
+    """The events of a YAML file, in time order (raises :class:`EventError`)."""
+    import yaml
+
+    file = Path(path)
+    try:
+        text = file.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise EventError(f"{file}: cannot read the events file: {exc.strerror or exc}") from exc
+    try:
+        node = yaml.compose(text)
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise EventError(f"{file}: not valid YAML: {exc}") from exc
+    lines: list[int] = []
+    if isinstance(node, yaml.SequenceNode):
+        lines = [item.start_mark.line + 1 for item in node.value]
+    return parse_events(data, str(file), lines)
+
+
+def parse_events(
+    data: Any, origin: str = "events", lines: list[int] | None = None
+) -> list[WorldEvent]:
+    """Events from YAML data (a list of mappings); ``lines``: each item's line."""
+    if data is None:
+        return []
+    if not isinstance(data, list):
+        raise EventError(f"{origin}: the events must be a YAML list; {_ALLOWED}")
+    events = []
+    for index, item in enumerate(data):
+        line = lines[index] if lines and index < len(lines) else None
+        where = f"{origin}:{line}" if line is not None else f"{origin}: item {index + 1}"
+        events.append(_event(item, where))
+    return sorted(events, key=lambda e: e.at)
+
+
+def _event(item: Any, where: str) -> WorldEvent:
+    if not isinstance(item, Mapping):
+        raise EventError(f"{where}: {item!r} is not a mapping; {_ALLOWED}")
+    unknown = [str(k) for k in item if k not in (*KINDS, "at", "to")]
+    if unknown:
+        hint = did_you_mean(unknown[0], (*KINDS, "at", "to"))
+        raise EventError(f"{where}: unknown key {unknown[0]!r}{hint}; {_ALLOWED}")
+    at = item.get("at")
+    if isinstance(at, bool) or not isinstance(at, (int, float)) or not math.isfinite(at) or at < 0:
+        raise EventError(f"{where}: at: must be a number of seconds >= 0, got {at!r}; {_ALLOWED}")
+    kinds = [k for k in KINDS if k in item]
+    if len(kinds) != 1:
+        said = f"both {kinds[0]} and {kinds[1]}" if kinds else "no change"
+        raise EventError(f"{where}: {said}; {_ALLOWED}")
+    kind = kinds[0]
+    target = item[kind]
+    if not isinstance(target, str) or not target:
+        raise EventError(
+            f"{where}: {kind}: must name a hallway, location or object, got {target!r}"
+        )
+    to = item.get("to")
+    if kind == "move":
+        if not isinstance(to, str) or not to:
+            raise EventError(f"{where}: move: {target} needs to: SPAWN (where the object goes)")
+    elif to is not None:
+        raise EventError(f"{where}: to: goes with move: only; {_ALLOWED}")
+    return WorldEvent(float(at), kind, target, to, where)
+
+
+def check_events(
+    events: Iterable[WorldEvent],
+    gates: Iterable[str],
+    objects: Iterable[str],
+    spawns: Iterable[str],
+) -> None:
+    """Every name of ``events`` exists in the world (raises :class:`EventError`)."""
+    gate_names, object_names = set(gates), set(objects)
+    places = {*spawns, *gate_names}
+    for event in events:
+        if event.kind == "move":
+            if event.target not in object_names:
+                hint = did_you_mean(event.target, object_names)
+                raise EventError(f"{event.origin}: move: no object {event.target!r}{hint}")
+            if event.to not in places:
+                hint = did_you_mean(str(event.to), places)
+                raise EventError(
+                    f"{event.origin}: to: no object spawn or location {event.to!r}{hint}"
+                )
+        elif event.target not in gate_names:
+            hint = did_you_mean(event.target, gate_names)
+            raise EventError(
+                f"{event.origin}: {event.kind}: no hallway or location {event.target!r}{hint}"
+            )

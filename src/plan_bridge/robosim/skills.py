@@ -1,0 +1,155 @@
+"""SMACH skills over pyrobosim's robot API, one per action of the robosim domain.
+
+Every skill is a small StateMachine acting on a :class:`~.world.RobosimWorld`:
+
+* ``navigate``: ``PLAN`` (pyrobosim's path planner) -> ``DRIVE`` (its path executor)
+  -> ``LOOK``;
+* ``cross``: ``PLAN`` (the hallway's centre line, refused when the hallway is closed)
+  -> ``DRIVE`` -> ``LOOK``;
+* ``pick``, ``place``, ``open``, ``close``, ``detect``, ``charge``: ``ACT`` -> ``LOOK``.
+
+``PLAN``, ``DRIVE`` and ``ACT`` keep pyrobosim's ``ExecutionStatus`` in the userdata
+(``status``, ``message``); ``LOOK`` reports what the robot sees afterwards
+(``observations``) and maps the status to the skill's outcome: SUCCESS ->
+``succeeded``, CANCELED -> ``preempted``, anything else (PRECONDITION_FAILURE,
+PLANNING_FAILURE, EXECUTION_FAILURE, POSTCONDITION_FAILURE, INVALID_ACTION) ->
+``aborted``. A preempt cancels the robot's running action (``robot.cancel_actions()``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import smach
+from plan_bridge.robosim.actions import act, cross_path, follow, plan_drive
+from plan_bridge.robosim.world import ActionResult, RobosimWorld
+from plan_bridge.skills.kit import SKILL_OUTCOMES, skill_machine
+from plan_bridge.skills.registry import OBSERVATIONS_KEY, SkillRegistry
+
+__all__ = ["ACTIONS", "robosim_skills", "skill_for"]
+
+#: The actions of the robosim domain and their parameters.
+ACTIONS: dict[str, tuple[str, ...]] = {
+    "navigate": ("robot", "origin", "target"),
+    "cross": ("robot", "origin", "target", "hallway"),
+    "pick": ("robot", "object", "spawn", "location"),
+    "place": ("robot", "object", "spawn", "location"),
+    "open": ("robot", "gate", "spot"),
+    "close": ("robot", "gate", "spot"),
+    "detect": ("robot", "spawn", "location"),
+    "charge": ("robot", "spawn", "location"),
+}
+_RESULT_KEYS = ["status", "message"]
+
+
+class _Step(smach.State):
+    """A state that runs ``work(preempted)`` and keeps its result in the userdata."""
+
+    def __init__(
+        self,
+        work: Callable[[smach.UserData, Callable[[], bool]], ActionResult],
+        outcomes: list[str],
+        choose: Callable[[ActionResult], str],
+        input_keys: tuple[str, ...] = (),
+        output_keys: tuple[str, ...] = (),
+    ) -> None:
+        super().__init__(
+            outcomes=outcomes,
+            input_keys=list(input_keys),
+            output_keys=[*_RESULT_KEYS, *output_keys],
+        )
+        self.work = work
+        self.choose = choose
+
+    def execute(self, ud: smach.UserData) -> str:
+        result = self.work(ud, self.preempt_requested)
+        ud.status, ud.message = result.status, result.message
+        return self.choose(result)
+
+
+class _Look(smach.State):
+    """Report what the robot sees; the skill's outcome from the action's status."""
+
+    def __init__(self, world: RobosimWorld, robot: Any, about: tuple[str, ...]) -> None:
+        super().__init__(
+            outcomes=list(SKILL_OUTCOMES), input_keys=_RESULT_KEYS, io_keys=[OBSERVATIONS_KEY]
+        )
+        self.world = world
+        self.robot = robot
+        self.about = about
+
+    def execute(self, ud: smach.UserData) -> str:
+        ud[OBSERVATIONS_KEY] = dict(self.world.observe(self.robot, self.about))
+        outcome = ActionResult(ud.status, ud.message).outcome
+        if ud.status != "SUCCESS":
+            smach.logdebug(f"{self.robot.name}: {ud.status}: {ud.message}")
+        if outcome == "preempted" or self.preempt_requested():
+            self.service_preempt()
+            return "preempted"
+        return outcome
+
+
+def skill_for(world: RobosimWorld, action: str, *args: str) -> smach.StateMachine:
+    """The skill machine of one step: ``skill_for(world, "pick", "robot", "apple0", ...)``."""
+    names = ACTIONS[action]
+    robot = world.robot(args[0])
+    sm = skill_machine(bind=dict(zip(names, args, strict=True)))
+    look = _Look(world, robot, tuple(args))
+    with sm:
+        if action in ("navigate", "cross"):
+
+            def plan(ud: smach.UserData, preempted: Callable[[], bool]) -> ActionResult:
+                if preempted():
+                    return ActionResult("CANCELED", "preempted before planning")
+                if action == "cross":
+                    path, result = cross_path(world, robot, args[3], args[2])
+                else:
+                    path, result = plan_drive(world, robot, args[2])
+                ud.path = path
+                return result
+
+            def drive(ud: smach.UserData, preempted: Callable[[], bool]) -> ActionResult:
+                return follow(world, robot, ud.path, preempted)
+
+            smach.StateMachine.add(
+                "PLAN",
+                _Step(
+                    plan,
+                    ["planned", "arrived", "failed"],
+                    lambda r: (
+                        "failed" if r.status != "SUCCESS" else "arrived" if r.message else "planned"
+                    ),
+                    output_keys=("path",),
+                ),
+                transitions={"planned": "DRIVE", "arrived": "LOOK", "failed": "LOOK"},
+            )
+            smach.StateMachine.add(
+                "DRIVE",
+                _Step(drive, ["done"], lambda r: "done", input_keys=("path",)),
+                transitions={"done": "LOOK"},
+            )
+        else:
+
+            def work(ud: smach.UserData, preempted: Callable[[], bool]) -> ActionResult:
+                return act(world, robot, action, list(args), preempted)
+
+            smach.StateMachine.add(
+                "ACT", _Step(work, ["done"], lambda r: "done"), transitions={"done": "LOOK"}
+            )
+        smach.StateMachine.add("LOOK", look)
+    return sm
+
+
+def robosim_skills(world: RobosimWorld, registry: SkillRegistry | None = None) -> SkillRegistry:
+    """A registry of simulated skills acting on ``world`` for every robosim action."""
+    registry = registry or SkillRegistry(simulated=True)
+    for action in ACTIONS:
+
+        def factory(*args: str, _action: str = action) -> smach.State:
+            return skill_for(world, _action, *args)
+
+        factory.__qualname__ = f"skill_for[{action}]"
+        registry.add(action, factory, simulated=True)
+    registry.world = world
+    return registry

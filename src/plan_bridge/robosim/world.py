@@ -1,0 +1,454 @@
+"""A pyrobosim world as the :class:`~plan_bridge.execution.world.World` of a mission.
+
+**Time.** Simulated seconds on the world's :class:`~plan_bridge.execution.clock.SimClock`,
+spent by what the robots do: a drive takes its trajectory's time (path length at the
+path executor's speed, turns included), the other actions fixed durations
+(:data:`ACTION_SECONDS`, the domain's). pyrobosim runs as fast as the CPU allows
+(``realtime_factor=-1``); with ``time_scale > 0`` drives run at ``1 / time_scale`` of
+real time and the other actions wait their paced time, so a viewer can follow (and a
+preempt stops a drive half-way).
+
+**Faults** are pyrobosim's own: every action of every robot gets
+``ExecutionOptions(success_probability=1 - fail_rate, rng_seed=...)`` seeded from the
+run's seed (its battery usage is the world file's), and numpy's generator (paths,
+grasps, placements) is seeded before every action, so a seeded run repeats.
+
+**Sensing** reports what a robot can observe where it is: its own spot, what it holds,
+its battery, the open/locked state of the hallways and locations of its room that the
+step is about, and the objects of the spawn it stands at (what pyrobosim's ``detect``
+sees there, when the location is open) - never the planner's effects read back.
+
+**Events** (:mod:`.events`) are applied when the clock passes their time: at each
+action's start and end, and during a drive (which stops where the robot is at that
+time; if its remaining path is blocked the drive fails there).
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from plan_bridge.execution.clock import SimClock
+from plan_bridge.execution.world import Observation
+from plan_bridge.pddl.task import Fact, format_fact, parse_fact
+from plan_bridge.robosim.events import WorldEvent, check_events
+from plan_bridge.robosim.loading import load_world_file, quiet_stdout
+from plan_bridge.robosim.problem import WorldModel, describe_world
+
+if TYPE_CHECKING:
+    from plan_bridge.planning.planner import PlanStep
+
+__all__ = ["ACTION_SECONDS", "ActionResult", "RobosimWorld"]
+
+#: Simulated seconds of the actions that are not drives (as in the domain).
+ACTION_SECONDS = {
+    "pick": 2.0,
+    "place": 2.0,
+    "open": 3.0,
+    "close": 3.0,
+    "detect": 1.0,
+    "charge": 10.0,
+}
+#: The robot actions that get seeded ExecutionOptions (faults).
+FAULTY = ("navigate", "pick", "place", "detect", "open", "close", "charge")
+
+
+@dataclass(frozen=True)
+class ActionResult:
+    """What a robot action ended with: pyrobosim's ``ExecutionStatus`` name and message."""
+
+    status: str
+    message: str = ""
+
+    @property
+    def outcome(self) -> str:
+        """The skill outcome: ``succeeded``, ``preempted`` (CANCELED) or ``aborted``."""
+        return {"SUCCESS": "succeeded", "CANCELED": "preempted"}.get(self.status, "aborted")
+
+    @classmethod
+    def of(cls, result: Any) -> ActionResult:
+        return cls(str(result.status.name), str(result.message or ""))
+
+
+class RobosimWorld:
+    """The world of a mission on a pyrobosim world file (see the module's doc)."""
+
+    def __init__(
+        self,
+        world_file: str | Path,
+        goal: Iterable[Fact] = (),
+        *,
+        seed: int = 0,
+        fail_rate: float = 0.0,
+        events: Iterable[WorldEvent] = (),
+    ) -> None:
+        if not 0.0 <= fail_rate <= 1.0:
+            raise ValueError(f"fail_rate must be between 0 and 1, got {fail_rate}")
+        self.path = Path(world_file)
+        self.sim: Any = load_world_file(self.path)
+        self.model: WorldModel = describe_world(self.sim, str(self.path))
+        self.goal = tuple(parse_fact(f) for f in goal)
+        self.seed = seed
+        self.fail_rate = fail_rate
+        self.clock = SimClock()
+        self._time_scale = 0.0
+        self._lock = threading.RLock()
+        self._names = {name.lower(): name for name in self.model.names}
+        self.robots: dict[str, Any] = {robot.name.lower(): robot for robot in self.sim.robots}
+        self.actions_run = 0
+        self.faults = 0
+        self.distance_m = 0.0
+        #: Wall seconds spent inside pyrobosim (path planning, actions): for benchmarks.
+        self.robot_wall_s = 0.0
+        self.searched: set[str] = set()
+        self.changes: list[str] = []
+        """What the world's events did (and when), in order."""
+        self._pending: list[WorldEvent] = []
+        self._options: dict[tuple[str, str], Any] = {}
+        self._install_options()
+        self.schedule(events)
+
+    # -- set-up ------------------------------------------------------------------------
+    def _install_options(self) -> None:
+        from pyrobosim.planning.actions import ExecutionOptions
+
+        for index, robot in enumerate(self.sim.robots):
+            own = dict(robot.action_execution_options)
+            for number, action in enumerate(FAULTY):
+                usage = own[action].battery_usage if action in own else 0.0
+                options = ExecutionOptions(
+                    success_probability=1.0 - self.fail_rate,
+                    rng_seed=(self.seed * 1009 + index * 31 + number) % 2**32,
+                    battery_usage=usage,
+                )
+                self._options[(robot.name, action)] = options
+                if action != "charge":
+                    own[action] = options
+            robot.action_execution_options = own
+
+    def schedule(self, events: Iterable[WorldEvent]) -> None:
+        """Add events (their names are checked against the world: :class:`EventError`)."""
+        new = list(events)
+        check_events(
+            new,
+            self.model.gates,
+            self.model.items,
+            [s.name for s in self.model.spots.values() if s.kind == "spawn"],
+        )
+        with self._lock:
+            self._pending = sorted([*self._pending, *new], key=lambda e: e.at)
+
+    @property
+    def time_scale(self) -> float:
+        """Wall seconds per simulated second (0: as fast as the CPU allows)."""
+        return self._time_scale
+
+    @time_scale.setter
+    def time_scale(self, value: float) -> None:
+        if value < 0:
+            raise ValueError(f"time_scale must be 0 or more, got {value!r}")
+        self._time_scale = float(value)
+
+    @property
+    def realtime_factor(self) -> float:
+        return -1.0 if self._time_scale <= 0 else 1.0 / self._time_scale
+
+    def name(self, pddl: str) -> str:
+        """The world's name of a PDDL object (PDDL names are read in lower case)."""
+        return self._names.get(pddl.lower(), pddl)
+
+    # -- time and events -------------------------------------------------------------
+    def now(self) -> float:
+        return float(self.clock.now())
+
+    def elapse(self, seconds: float) -> None:
+        """The calling thread's action took ``seconds`` of simulated time."""
+        if seconds <= 0:
+            return
+        if self.clock.taking_part():
+            self.clock.sleep(seconds)
+        else:
+            self.clock.advance(seconds)
+
+    def next_event_time(self) -> float | None:
+        with self._lock:
+            return self._pending[0].at if self._pending else None
+
+    def apply_due_events(self) -> list[str]:
+        """Apply the events whose time has come; what each did. An event the world
+        refuses now (a robot in the hallway being closed) waits for the next check."""
+        done: list[str] = []
+        with self._lock:
+            now = self.now()
+            kept: list[WorldEvent] = []
+            for event in self._pending:
+                if event.at > now + 1e-9:
+                    kept.append(event)
+                    continue
+                ok, text = self._apply_event(event)
+                if ok:
+                    done.append(f"{now:.2f} s: {text}")
+                else:
+                    kept.append(event)
+            self._pending = kept
+            self.changes.extend(done)
+        return done
+
+    def _apply_event(self, event: WorldEvent) -> tuple[bool, str]:
+        world = self.sim
+        if event.kind == "move":
+            obj = world.get_object_by_name(event.target)
+            if obj is None or any(r.manipulated_object is obj for r in world.robots):
+                return True, f"{event.target} is held by a robot: not moved ({event.origin})"
+            ok = bool(world.update_object(obj, loc=event.to))
+            return ok, f"{event.target} moved to {obj.parent.name}"
+        call = {
+            "open": world.open_location,
+            "close": world.close_location,
+            "lock": world.lock_location,
+            "unlock": world.unlock_location,
+        }[event.kind]
+        result = call(event.target)
+        if result.status.name == "SUCCESS":
+            for robot in world.robots:
+                robot.update_polygons()
+            return True, f"{event.target} {event.kind}{'ed' if event.kind != 'close' else 'd'}"
+        if "Robot" in str(result.message):  # a robot in the doorway: try again later
+            return False, ""
+        return True, f"{event.kind} {event.target}: {result.message} ({event.origin})"
+
+    # -- running robot actions -------------------------------------------------------
+    def robot(self, name: str) -> Any:
+        robot = self.robots.get(name.lower())
+        if robot is None:
+            raise KeyError(f"no robot {name!r} in {self.model.name}")
+        return robot
+
+    def begin(self, robot: Any) -> None:
+        """Before an action: seed numpy's generator (paths, grasps, placements) from the
+        run's seed and the action's number, and apply the events that are due."""
+        import numpy as np
+
+        with self._lock:
+            self.actions_run += 1
+            np.random.seed((self.seed * 1_000_003 + self.actions_run) % 2**32)
+        self.apply_due_events()
+
+    def run_blocking(
+        self, robot: Any, call: Callable[[], Any], preempted: Callable[[], bool]
+    ) -> ActionResult:
+        """Run a blocking pyrobosim call in a worker thread; a preempt cancels the
+        robot's action (``robot.cancel_actions()``)."""
+        if preempted():
+            return ActionResult("CANCELED", "preempted before it started")
+        box: dict[str, Any] = {}
+
+        def work() -> None:
+            try:
+                box["result"] = call()
+            except Exception as exc:  # reported as the action's failure, not lost
+                box["error"] = exc
+
+        began = time.perf_counter()
+        worker = threading.Thread(target=work, name=f"pyrobosim-{robot.name}", daemon=True)
+        worker.start()
+        canceled = False
+        while worker.is_alive():
+            worker.join(0.02)
+            if not canceled and worker.is_alive() and preempted():
+                canceled = True
+                if robot.is_busy():
+                    robot.cancel_actions()
+        self.robot_wall_s += time.perf_counter() - began
+        if "error" in box:
+            error = box["error"]
+            return ActionResult("EXECUTION_FAILURE", f"{type(error).__name__}: {error}")
+        result = ActionResult.of(box["result"])
+        if result.message.startswith("Simulated"):
+            with self._lock:
+                self.faults += 1
+        if canceled and result.status != "SUCCESS":
+            return ActionResult("CANCELED", result.message or "canceled")
+        return result
+
+    def wait_paced(self, seconds: float, preempted: Callable[[], bool]) -> bool:
+        """With a time scale, wait the wall time of ``seconds``; False if preempted."""
+        deadline = time.monotonic() + seconds * self._time_scale
+        while time.monotonic() < deadline:
+            if preempted():
+                return False
+            time.sleep(min(0.02, max(0.0, deadline - time.monotonic())))
+        return not preempted()
+
+    def draw_fault(self, robot: Any, action: str) -> bool:
+        """Whether ``action`` (one pyrobosim has no options for) fails now."""
+        failed = not self._options[(robot.name, action)].should_succeed()
+        if failed:
+            with self._lock:
+                self.faults += 1
+        return failed
+
+    # -- what a robot sees -----------------------------------------------------------
+    def spot_of(self, robot: Any) -> str:
+        """The spot a robot is at (a room's spot when it stands elsewhere in the room)."""
+        from pyrobosim.core.hallway import Hallway
+
+        place = robot.location
+        if isinstance(place, Hallway) and place.name in self.model.hall_ends:
+            pose = robot.get_pose()
+            return min(
+                self.model.hall_ends[place.name],
+                key=lambda s: math.hypot(
+                    self.model.spots[s].x - pose.x, self.model.spots[s].y - pose.y
+                ),
+            )
+        if place is not None and place.name in self.model.spots:
+            return str(place.name)
+        room = getattr(place, "parent", None)  # a location: its room
+        return str(room.name) if room is not None else ""
+
+    def observe(self, robot: Any, about: Iterable[str] = ()) -> list[Observation]:
+        """What ``robot`` sees now, of itself and of the things ``about`` names."""
+        model = self.model
+        named = {self.name(n) for n in about}
+        spot = self.spot_of(robot)
+        seen: dict[Fact, bool | float] = {}
+        me = robot.name
+        if spot:
+            seen[_f("At", me, spot)] = True
+        for name in named:
+            if name in model.spots and name != spot:
+                seen[_f("At", me, name)] = False
+        held = robot.manipulated_object
+        for item in {*(n for n in named if n in model.items), *([held.name] if held else [])}:
+            seen[_f("Holding", me, item)] = held is not None and held.name == item
+        seen[_f("HandEmpty", me)] = held is None
+        seen[_f("battery-level", me)] = round(float(robot.battery_level), 3)
+        room = model.spots[spot].room if spot in model.spots else ""
+        gates = {n for n in named if n in model.gates}
+        gates |= {g for n in {*named, spot} if n in model.spots for g in [model.spots[n].gate] if g}
+        for gate in sorted(gates):
+            if self._visible(gate, room, spot):
+                entity = self.sim.get_entity_by_name(gate)
+                seen[_f("IsOpen", gate)] = bool(entity.is_open)
+                seen[_f("IsLocked", gate)] = bool(entity.is_locked)
+        place = model.spots.get(spot)
+        if place is not None and place.kind == "spawn":
+            entity = self.sim.get_entity_by_name(spot)
+            if entity is not None and entity.is_open:
+                here = {child.name for child in entity.children}
+                single = place.gate is not None and len(model.gates[place.gate].spawns) == 1
+                for item in model.items:
+                    seen[_f("At", item, spot)] = item in here
+                    if place.gate is not None and (item in here or single):
+                        seen[_f("Has", place.gate, item)] = item in here
+        return sorted(seen.items(), key=lambda pair: pair[0])
+
+    def _visible(self, gate: str, room: str, spot: str) -> bool:
+        spot_info = self.model.spots.get(spot)
+        if spot_info is not None and spot_info.gate == gate:
+            return True
+        entity = self.sim.get_entity_by_name(gate)
+        if self.model.gates[gate].kind == "hall":
+            return room in (entity.room_start.name, entity.room_end.name)
+        return entity.parent is not None and entity.parent.name == room
+
+    # -- the World protocol ------------------------------------------------------------
+    def sense(self, steps: Sequence[PlanStep]) -> list[Observation]:
+        """What the robots of ``steps`` see now of the things the steps name."""
+        seen: dict[Fact, bool | float] = {}
+        for step in steps:
+            for arg in step.arguments:
+                robot = self.robots.get(arg.lower())
+                if robot is not None:
+                    seen.update(self.observe(robot, step.arguments))
+        return sorted(seen.items(), key=lambda pair: pair[0])
+
+    def adopt(self, step: PlanStep, observations: Sequence[Observation]) -> None:
+        """A user's skill did ``step``: make the pyrobosim world agree, then take the
+        observations it can (robot and object places, open/locked, battery)."""
+        from plan_bridge.robosim.adopt import adopt_step
+
+        with self._lock:
+            self.actions_run += 1
+            adopt_step(self, step, observations)
+
+    @property
+    def faults_injected(self) -> int:
+        return self.faults
+
+    def truth(self, fact: Fact) -> bool:
+        """Whether a fact of the domain holds in the pyrobosim world."""
+        name, *args = fact
+        name = name.lower()
+        names = [self.name(a) for a in args]
+        world = self.sim
+        if name == "at":
+            robot = self.robots.get(args[0].lower())
+            if robot is not None:
+                return self.spot_of(robot) == names[1]
+            obj = world.get_object_by_name(names[0])
+            return obj is not None and obj.parent is not None and obj.parent.name == names[1]
+        if name == "holding":
+            held = self.robot(args[0]).manipulated_object
+            return held is not None and held.name == names[1]
+        if name == "handempty":
+            return self.robot(args[0]).manipulated_object is None
+        if name in ("isopen", "islocked"):
+            entity = world.get_entity_by_name(names[0])
+            return bool(entity.is_open if name == "isopen" else entity.is_locked)
+        if name == "has":
+            obj = world.get_object_by_name(names[1])
+            spawn = obj.parent if obj is not None else None
+            return spawn is not None and spawn.parent is not None and spawn.parent.name == names[0]
+        if name == "searched":
+            return names[0] in self.searched
+        raise ValueError(f"{format_fact(fact)}: not a goal predicate of the robosim domain")
+
+    def goal_reached(self) -> bool:
+        with self._lock:
+            return all(self.truth(atom) for atom in self.goal)
+
+    def snapshot(self) -> dict[str, Any]:
+        from plan_bridge.robosim.adopt import snapshot_world
+
+        with self._lock:
+            return snapshot_world(self)
+
+    def restore(self, data: dict[str, Any]) -> None:
+        from plan_bridge.robosim.adopt import restore_world
+
+        with self._lock:
+            restore_world(self, data)
+
+    def abandon_running(self) -> None:
+        """Nothing to undo: a checkpoint is taken between actions, and the restored
+        world holds the robots where they were then."""
+
+    def figures(self) -> dict[str, Any]:
+        return {
+            "sim_time_s": round(self.now(), 3),
+            "faults_injected": self.faults,
+            "actions_run": self.actions_run,
+            "distance_m": round(self.distance_m, 3),
+            "battery": {r.name: round(float(r.battery_level), 2) for r in self.sim.robots},
+            "world_changes": len(self.changes),
+        }
+
+    def close(self) -> None:
+        """Stop pyrobosim's threads (sensors, path validation)."""
+        for robot in self.sim.robots:
+            robot.stop_sensor_threads()
+
+    def quietly(self) -> Any:
+        """A context in which pyrobosim's prints are swallowed."""
+        return quiet_stdout()
+
+
+def _f(*words: str) -> Fact:
+    return tuple(word.lower() for word in words)

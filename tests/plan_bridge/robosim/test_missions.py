@@ -1,0 +1,93 @@
+"""pyrobosim worlds as targets: prepare_mission, the CLI, seeded runs, events."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("pyrobosim", reason="pyrobosim is not installed (the sim extra)")
+
+from plan_bridge.cli import main
+from plan_bridge.missions.mission import TargetError, load_target
+from plan_bridge.missions.runner import MissionOptions, prepare_mission
+from plan_bridge.robosim.world import RobosimWorld
+
+FETCH = Path(__file__).resolve().parents[3] / "domains" / "robosim_fetch"
+CLOSE = FETCH / "events" / "close_hallway.yaml"
+
+
+def run(target: str | Path, **options: object) -> dict:  # type: ignore[type-arg]
+    goal = options.pop("goal", None)
+    events = options.pop("events", None)
+    loaded = load_target(target, goal=goal, events=events)  # type: ignore[arg-type]
+    mission = prepare_mission(loaded, MissionOptions(**options))  # type: ignore[arg-type]
+    mission.run()
+    assert isinstance(mission.world, RobosimWorld)
+    return {**mission.figures(), "executed": list(mission.executive.report.executed)}
+
+
+def test_a_seeded_run_with_faults_repeats_exactly() -> None:
+    first = run(FETCH, seed=5, fail_rate=0.3)
+    second = run(FETCH, seed=5, fail_rate=0.3)
+    assert first["goal_reached"] and first["faults_injected"] > 0
+    for key in ("executed", "outcome", "faults_injected", "sim_time_s", "distance_m"):
+        assert first[key] == second[key]
+
+
+def test_a_hallway_closed_on_the_way_leads_to_a_replan_through_the_office() -> None:
+    figures = run(FETCH, fail_rate=0.0, events=CLOSE)
+    assert figures["goal_reached"]
+    assert figures["replans"] >= 1
+    assert figures["world_changes"] == 2
+    assert any("hall_kitchen_office" in step for step in figures["executed"])
+
+
+def test_a_world_file_needs_a_goal_and_checks_it() -> None:
+    with pytest.raises(TargetError, match="give the goal with --goal"):
+        load_target(FETCH / "world.yaml")
+    with pytest.raises(TargetError, match=r"no such goal .*did you mean fetch_soda"):
+        load_target(FETCH, "fetch_sod")
+
+
+def test_cli_problem_plan_check_and_run_on_a_world_file(
+    test_world_file: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    goal = "(At apple0 table0_tabletop)"
+    assert main(["problem", str(test_world_file), "--goal", goal]) == 0
+    assert "(:goal (and (At apple0 table0_tabletop)))" in capsys.readouterr().out
+    assert main(["plan", str(test_world_file), "--goal", goal]) == 0
+    assert "(pick robot apple0 my_desk_desktop my_desk)" in capsys.readouterr().out
+    assert main(["check", str(FETCH)]) == 0
+    out = capsys.readouterr().out
+    assert "fetch_soda: temporal" in out and "OK (3 problem(s) checked)" in out
+    assert (
+        main(["run", str(test_world_file), "--goal", goal, "--seed", "2", "--json", "--quiet"]) == 0
+    )
+    figures = json.loads(capsys.readouterr().out)
+    assert figures["goal_reached"] and figures["sim_time_s"] > 0 and figures["distance_m"] > 0
+
+
+def test_cli_bad_goal_is_bad_input_and_goal_on_pddl_is_refused(
+    test_world_file: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["plan", str(test_world_file), "--goal", "(At apple0 tabel0)"]) == 2
+    assert "did you mean table0" in capsys.readouterr().err
+    assert main(["plan", "domains/fetch_drink", "--goal", "(At a b)"]) == 2
+    assert "--goal is for pyrobosim worlds" in capsys.readouterr().err
+
+
+def test_an_impossible_goal_ends_with_exit_1_and_a_reason(
+    tmp_path: Path, test_world_file: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    text = test_world_file.read_text().replace("$DATA", str(test_world_file.parent))
+    locked = text.replace(
+        "is_open: True\n    is_locked: False", "is_open: False\n    is_locked: True"
+    )
+    world = tmp_path / "locked.yaml"
+    world.write_text(locked)
+    code = main(["run", str(world), "--goal", "(At robot bedroom)", "--planner", "kairos"])
+    err = capsys.readouterr().err
+    assert code == 1
+    assert "goal NOT reached" in err and "no plan" in err
