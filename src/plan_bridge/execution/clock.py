@@ -42,7 +42,10 @@ import time
 from collections.abc import Callable, Iterator
 from contextlib import AbstractContextManager
 from types import TracebackType
-from typing import Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
+
+if TYPE_CHECKING:
+    from plan_bridge.execution.world import World
 
 __all__ = [
     "MAX_PACE_S",
@@ -161,10 +164,9 @@ class WallClock:
 WALL_CLOCK = WallClock()
 
 
-def clock_of(world: object) -> Clock:
-    """The clock of ``world`` (its ``clock`` attribute), or the wall clock."""
-    clock = getattr(world, "clock", None)
-    return clock if isinstance(clock, Clock) else WALL_CLOCK
+def clock_of(world: World | None) -> Clock:
+    """The clock of ``world``, or the wall clock when there is no world."""
+    return WALL_CLOCK if world is None else world.clock
 
 
 class _SimCondition(ClockCondition):

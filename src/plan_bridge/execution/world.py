@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 from plan_bridge.pddl.task import Fact, FactLike, format_fact, parse_fact
 
 if TYPE_CHECKING:
+    from plan_bridge.execution.clock import Clock
     from plan_bridge.planning.planner import PlanStep
 
 __all__ = [
@@ -113,6 +114,12 @@ class World(Protocol):
     #: Wall seconds per simulated second (0: as fast as it goes). A world on the wall
     #: clock (a real robot) keeps 0 and ignores it.
     time_scale: float
+
+    @property
+    def clock(self) -> Clock:
+        """The world's clock: a simulated world's :class:`~plan_bridge.execution.clock.SimClock`
+        (steps take turns on it in simulated-time order), a robot's wall clock."""
+        ...
 
     def now(self) -> float:
         """The world's time in seconds: simulated time, or wall time for a real robot."""

@@ -23,6 +23,7 @@ from typing import Any, TextIO
 
 import smach
 from plan_bridge.errors import PlanBridgeError
+from plan_bridge.execution.clock import WALL_CLOCK, Clock
 from plan_bridge.execution.world import Observation
 from plan_bridge.planning.planner import PlanStep
 from plan_bridge.ros.protocol import task_digest
@@ -324,11 +325,15 @@ class RobotWorld:
 
     def __init__(self, robot: RobotConnection) -> None:
         self.robot = robot
-        self._origin = time.monotonic()
+        self._origin = WALL_CLOCK.now()
         self._info: dict[str, Any] = {}
 
+    @property
+    def clock(self) -> Clock:
+        return WALL_CLOCK
+
     def now(self) -> float:
-        return time.monotonic() - self._origin
+        return WALL_CLOCK.now() - self._origin
 
     def adopt(self, step: PlanStep, observations: Sequence[Observation]) -> None:
         """Nothing to take: the robot's world changed by itself. (A user's skill run in
