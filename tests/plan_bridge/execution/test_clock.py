@@ -76,10 +76,10 @@ def test_the_wall_clock_reads_monotonic_time_and_a_preempted_wait_returns_false(
         pass
 
 
-def test_a_simulated_world_owns_a_simulated_clock_and_other_objects_the_wall_clock() -> None:
+def test_a_simulated_world_owns_a_simulated_clock_and_no_world_means_the_wall_clock() -> None:
     world = SimulatedWorld(load_task(COURIER / "domain.pddl", COURIER / "problems" / "p01.pddl"))
     assert clock_of(world) is world.clock and world.clock.simulated
-    assert clock_of(object()) is WALL_CLOCK
+    assert clock_of(None) is WALL_CLOCK
     world.time_scale = 0.5
     assert world.clock.time_scale == 0.5
     with pytest.raises(ValueError, match="time_scale must be 0 or more"):
