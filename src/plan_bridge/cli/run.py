@@ -197,6 +197,10 @@ RESUMABLE = (
 #: Run options a resume takes from the journal unless given again (journals written
 #: before they were recorded lack them).
 RESUMED_UNLESS_GIVEN = ("time_scale",)
+#: What a pyrobosim world's run needs besides the target (None for other targets):
+#: its goal (the text, so that a goals.yaml edited since does not change the run)
+#: and its events file. Taken from the journal; journals written before lack them.
+RESUMED_WORLD = ("goal", "events")
 
 
 def _resume_arguments(
@@ -207,6 +211,12 @@ def _resume_arguments(
 
     if args.target is not None:
         return fail("with --resume, the target and options come from the journal: give no TARGET")
+    given = [f"--{key}" for key in RESUMED_WORLD if getattr(args, key) is not None]
+    if given:
+        return fail(
+            f"with --resume, the goal and events of a pyrobosim run come from the journal: "
+            f"give no {' or '.join(given)}"
+        )
     try:
         header, records = read_journal(args.resume)
     except (OSError, ValueError) as exc:
@@ -221,6 +231,8 @@ def _resume_arguments(
     for key in RESUMED_UNLESS_GIVEN:
         if getattr(args, key) is None and run.get(key) is not None:
             setattr(args, key, run[key])
+    for key in RESUMED_WORLD:
+        setattr(args, key, run.get(key))
     if run.get("ros"):
         return fail(
             f"{args.resume}: a run with --ros cannot be resumed: the robot's world lives in its "
@@ -233,6 +245,20 @@ def _resume_arguments(
     except (ValueError, TypeError, KeyError) as exc:
         return fail(f"{args.resume}: its checkpoints cannot be read: {exc}")
     return run, checkpoints[-1] if checkpoints else None
+
+
+def _world_options(args: argparse.Namespace, target: Target) -> dict[str, Any]:
+    """The journal's record of a pyrobosim run's goal and events (see RESUMED_WORLD)."""
+    from plan_bridge.missions.world_target import WorldTarget
+
+    if not isinstance(target, WorldTarget):
+        return dict.fromkeys(RESUMED_WORLD)
+    return {
+        # A goal of goals.yaml is resumed by its text, under its name.
+        "problem": target.goal_name or str(target.problem_path),
+        "goal": target.goal_text,
+        "events": None if args.events is None else str(args.events),
+    }
 
 
 def _connect_robot(
@@ -347,6 +373,7 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
         run_options.update(
             target=str(args.target), problem=str(target.problem_path), fail_rate=mission.fail_rate
         )
+        run_options.update(_world_options(args, target))
         if args.ros:
             # The robot's world lives in its process: checkpoints hold no world snapshot.
             run_options["ros"] = args.ros_prefix or True

@@ -36,7 +36,14 @@ if TYPE_CHECKING:
     from plan_bridge.execution.world import World, WorldState
     from plan_bridge.planning.worker import WorkerPool
 
-__all__ = ["MissionSetup", "ScriptedMission", "Target", "TargetError", "load_target"]
+__all__ = [
+    "MissionSetup",
+    "ScriptedMission",
+    "Target",
+    "TargetError",
+    "load_domain_module",
+    "load_target",
+]
 
 
 class TargetError(PlanBridgeError):
@@ -200,7 +207,7 @@ def load_target(
         else:
             problem_path = _problem_path(Path(problem), path)
         task = load_task(domain, problem_path, prime=prime, before_parse=before_parse)
-        return Target(path.name, domain, problem_path, task, path, _load_module(path))
+        return Target(path.name, domain, problem_path, task, path, load_domain_module(path))
     if problem is None:
         raise TargetError(f"{path}: a bare domain file needs --problem PROBLEM.pddl")
     problem_path = Path(problem)
@@ -220,7 +227,7 @@ def _problem_path(problem: Path, folder: Path) -> Path:
     raise TargetError(f"{problem}: no such problem; problems of {folder.name}: {names or 'none'}")
 
 
-def _load_module(folder: Path) -> ModuleType | None:
+def load_domain_module(folder: Path) -> ModuleType | None:
     """Import the folder's Python as a package (so its modules import each other)."""
     entry = folder / "__init__.py"
     if not entry.is_file():

@@ -6,6 +6,12 @@ does for a world file (``WORLD.yaml``) or a world folder (``world.yaml``, option
 problem of the robosim domain and loads it as the task. The target's setup gives a
 :class:`~plan_bridge.robosim.world.RobosimWorld` and its skills, so
 :func:`~plan_bridge.missions.runner.prepare_mission` runs it like any other target.
+
+A world folder's variants (``plan-bridge study --variant NAME``) are its events files
+(``events/NAME.yaml``), and its Python (``__init__.py``), when it has one, may define
+``scripted(task, *, seed, fail_rate, variant="")``: the hand-written baseline of the
+study. The skills and the world are always the robosim ones (a ``setup()`` there is
+not used).
 """
 
 from __future__ import annotations
@@ -16,7 +22,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from plan_bridge.errors import PlanBridgeError
-from plan_bridge.missions.mission import MissionSetup, Target, TargetError
+from plan_bridge.missions.mission import MissionSetup, Target, TargetError, load_domain_module
 from plan_bridge.pddl.constructs import did_you_mean
 from plan_bridge.pddl.task import load_task_from_text
 from plan_bridge.robosim.events import WorldEvent, check_events, load_events
@@ -25,7 +31,7 @@ from plan_bridge.robosim.target_files import read_goals
 if TYPE_CHECKING:
     from plan_bridge.planning.worker import WorkerPool
 
-__all__ = ["WorldTarget", "load_world_target"]
+__all__ = ["WorldTarget", "load_world_target", "variant_events"]
 
 
 @dataclass
@@ -55,16 +61,31 @@ class WorldTarget(Target):
         from plan_bridge.robosim.skills import robosim_skills
         from plan_bridge.robosim.world import RobosimWorld
 
-        if variant:
-            raise TargetError(f"{self.world_file}: a pyrobosim world has no variants")
         world = RobosimWorld(
             self.world_file,
             self.task.goal_facts,
             seed=seed,
             fail_rate=fail_rate,
-            events=self.events,
+            events=[*self.events, *variant_events(self.folder or self.world_file, variant)],
         )
         return MissionSetup(skills=robosim_skills(world), world=world)
+
+
+def variant_events(folder: Path, variant: str) -> list[WorldEvent]:
+    """The events of a world variant: ``events/VARIANT.yaml`` of the world folder (none
+    for ``""``). A study's ``--variant close_hallway`` runs the world with those events."""
+    if not variant:
+        return []
+    events = folder / "events"
+    file = events / f"{variant}.yaml"
+    if not folder.is_dir() or not file.is_file():
+        names = sorted(p.stem for p in events.glob("*.yaml")) if events.is_dir() else []
+        hint = did_you_mean(variant, names)
+        raise TargetError(
+            f"{folder}: no world variant {variant!r}{hint}; the variants of a pyrobosim world "
+            f"folder are its events/NAME.yaml files: {', '.join(names) or 'none'}"
+        )
+    return load_events(file)
 
 
 def load_world_target(
@@ -132,7 +153,8 @@ def load_world_target(
         world_file,
         task,
         folder,
-        None,
+        # A world folder's own Python (__init__.py) may give a scripted() baseline.
+        load_domain_module(folder) if folder is not None else None,
         world_file=world_file,
         goal_text=goal,
         goal_name=name,

@@ -90,6 +90,7 @@ def follow(
         head = Path(poses=list(interp.poses[: k + 1])) if k >= 1 else None
     result = ActionResult("SUCCESS")
     before = robot.get_pose()
+    level_before = float(robot.battery_level)
     if head is not None:
         action = TaskAction("navigate", robot=robot.name, path=head)
 
@@ -103,6 +104,7 @@ def follow(
         result = world.run_blocking(robot, call, preempted)
     driven = _driven(traj, interp, robot, before, head is path, result)
     world.distance_m += driven[1]
+    world.count_drive(robot, level_before, driven[1])
     world.elapse(driven[0] if not split or result.status != "SUCCESS" else event_at - start)
     world.apply_due_events()
     if not split or result.status != "SUCCESS":
@@ -179,7 +181,7 @@ def _charge(world: RobosimWorld, robot: Any, args: list[str]) -> ActionResult:
         return ActionResult("PRECONDITION_FAILURE", f"{robot.name} is at {here}, not at a charger")
     if world.draw_fault(robot, "charge"):
         return ActionResult("EXECUTION_FAILURE", "Simulated charging failure.")
-    robot.battery_level = 100.0
+    world.recharge(robot)
     return ActionResult("SUCCESS")
 
 

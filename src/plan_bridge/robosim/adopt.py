@@ -86,7 +86,7 @@ def adopt_step(world: RobosimWorld, step: PlanStep, observations: Sequence[Obser
     elif action == "detect":
         world.searched.add(args[1])
     elif action == "charge":
-        world.robot(args[0]).battery_level = 100.0
+        world.recharge(world.robot(args[0]))
     for fact, value in observations:
         _adopt_observation(world, fact, value)
     world.sim.mark_changed()
@@ -156,6 +156,8 @@ def snapshot_world(world: RobosimWorld) -> dict[str, Any]:
         "actions_run": world.actions_run,
         "faults": world.faults,
         "distance_m": world.distance_m,
+        "battery_start": dict(world.battery_start),
+        "charged": dict(world.charged),
         "searched": sorted(world.searched),
         "changes": list(world.changes),
         "pending": [event.to_json() | {"origin": event.origin} for event in world._pending],
@@ -197,6 +199,9 @@ def restore_world(world: RobosimWorld, data: dict[str, Any]) -> None:
     world.actions_run = int(data["actions_run"])
     world.faults = int(data["faults"])
     world.distance_m = float(data["distance_m"])
+    # (Snapshots written before battery use was counted lack these: the world's own.)
+    world.battery_start.update({k: float(v) for k, v in data.get("battery_start", {}).items()})
+    world.charged.update({k: float(v) for k, v in data.get("charged", {}).items()})
     world.searched = set(data["searched"])
     world.changes = list(data["changes"])
     pending = data["pending"]

@@ -103,6 +103,10 @@ class RobosimWorld:
         self.actions_run = 0
         self.faults = 0
         self.distance_m = 0.0
+        """Metres the robots drove (their executed paths, stops on the way included)."""
+        self.battery_start = {r.name: float(r.battery_level) for r in self.sim.robots}
+        self.charged: dict[str, float] = dict.fromkeys(self.battery_start, 0.0)
+        """Battery (percent) each robot's charges put back."""
         #: Wall seconds spent inside pyrobosim (path planning, actions): for benchmarks.
         self.robot_wall_s = 0.0
         self.searched: set[str] = set()
@@ -437,8 +441,33 @@ class RobosimWorld:
             "actions_run": self.actions_run,
             "distance_m": round(self.distance_m, 3),
             "battery": {r.name: round(float(r.battery_level), 2) for r in self.sim.robots},
+            "battery_used": round(self.battery_used(), 3),
             "world_changes": len(self.changes),
         }
+
+    def battery_used(self) -> float:
+        """Battery the robots used (percentage points, summed over the robots): what
+        they had at the start minus what they have now, plus what charging put back."""
+        return sum(
+            self.battery_start[r.name] - float(r.battery_level) + self.charged[r.name]
+            for r in self.sim.robots
+        )
+
+    def recharge(self, robot: Any) -> None:
+        """A charge: the robot's battery to 100 (what it put back is counted)."""
+        with self._lock:
+            self.charged[robot.name] += max(0.0, 100.0 - float(robot.battery_level))
+            robot.battery_level = 100.0
+
+    def count_drive(self, robot: Any, level_before: float, metres: float) -> None:
+        """After a drive of ``metres``: pyrobosim charges a robot that arrives at a
+        charger's spawn (battery to 100); count what that put back."""
+        usage = float(self._options[(robot.name, "navigate")].battery_usage)
+        expected = max(0.0, level_before - usage * metres)
+        level = float(robot.battery_level)
+        if level > expected + 1e-6:
+            with self._lock:
+                self.charged[robot.name] += level - expected
 
     def close(self) -> None:
         """Stop pyrobosim's threads (sensors, path validation)."""

@@ -18,7 +18,6 @@ import dataclasses
 import importlib
 import os
 import re
-import socket
 import threading
 import time
 from collections.abc import Callable, Sequence
@@ -26,7 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from plan_bridge.errors import PlanBridgeError
-from plan_bridge.study.runs import RunSpec, failure_row, pin_hash_seed, run_one
+from plan_bridge.study.runs import RunSpec, failure_row, pin_hash_seed, placement, run_one
 
 __all__ = ["ClusterError", "DaskPool", "parse_cluster", "run_task"]
 
@@ -88,8 +87,7 @@ def run_task(spec: RunSpec, run_timeout: float) -> dict[str, Any]:
         row = failure_row(
             spec, "timeout", f"run exceeded {run_timeout:g} s", time.monotonic() - started
         )
-    row["host"] = socket.gethostname()
-    row["worker"] = get_worker().address
+    row.update(placement(get_worker().address))
     return row
 
 

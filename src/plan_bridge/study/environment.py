@@ -8,6 +8,7 @@ read from package metadata: nothing here imports a planner or Dask.
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import platform
@@ -22,6 +23,7 @@ from typing import Any
 __all__ = [
     "PACKAGES",
     "PLANNER_PACKAGES",
+    "cpu_model",
     "machine_info",
     "read_sessions",
     "record_session",
@@ -57,6 +59,7 @@ def _version(name: str) -> str:
         return ""
 
 
+@functools.lru_cache(maxsize=1)
 def cpu_model() -> str:
     """The CPU's model name (``/proc/cpuinfo`` on Linux, else what ``platform`` knows)."""
     try:

@@ -49,6 +49,11 @@ def summarise_results(rows: Iterable[dict[str, str]]) -> list[dict[str, Any]]:
         def mean_ok(column: str, digits: int, ok: list[dict[str, str]] = ok) -> float | str:
             return round(sum(_f(r[column]) for r in ok) / len(ok), digits) if ok else NA
 
+        def mean_reported(column: str, ok: list[dict[str, str]] = ok) -> float | str:
+            # A world that does not report the number: '' (not 0).
+            values = [_f(r[column]) for r in ok if r.get(column)]
+            return round(sum(values) / len(values), 3) if values else NA if not ok else ""
+
         wall: tuple[float | str, ...] = (
             tuple(round(v, 4) for v in median_ci([_f(r["wall_time_s"]) for r in ok]))
             if ok
@@ -72,6 +77,8 @@ def summarise_results(rows: Iterable[dict[str, str]]) -> list[dict[str, Any]]:
                 "mean_wall_time_s": mean_ok("wall_time_s", 4),
                 "mean_wall_time_all_s": round(total / len(items), 4),
                 "mean_sim_time_s": mean_ok("sim_time_s", 3),
+                "mean_distance_m": mean_reported("distance_m"),
+                "mean_battery_used": mean_reported("battery_used"),
                 "mean_steps": mean_ok("steps", 2),
                 "mean_actions": mean_ok("actions_executed", 2),
                 "mean_faults": round(sum(_f(r["faults_injected"]) for r in items) / len(items), 2),
@@ -189,8 +196,11 @@ def authoring_cost(target_path: str, problem: str = "") -> list[dict[str, Any]]:
 def fault_model(target_path: str, problem: str = "") -> dict[str, float]:
     """Fault name -> probability per unit of fault rate, from the domain's world."""
     from plan_bridge.execution.simulation import SimulatedWorld
+    from plan_bridge.missions.world_target import WorldTarget
 
     target = target_of(target_path, problem)
+    if isinstance(target, WorldTarget):
+        return {"a robot action fails (pyrobosim's ExecutionOptions)": 1.0}
     if not target.has_own_skills:
         return {}
     world = target.setup(seed=0, fail_rate=0.0).world
@@ -200,6 +210,11 @@ def fault_model(target_path: str, problem: str = "") -> dict[str, float]:
 # -- report.md ------------------------------------------------------------------------------------
 def _num(value: Any, fmt: str) -> str:
     return NA if value == NA else format(value, fmt)
+
+
+def _reported(value: Any, fmt: str) -> str:
+    """A number only some worlds report: blank where this one does not."""
+    return "" if value == "" else _num(value, fmt)
 
 
 def _seconds(value: Any, fmt: str) -> str:
@@ -244,6 +259,7 @@ def _setup_section(
         )
         + ".",
     ]
+    fault_models = {t: m for t, m in fault_models.items() if m}
     if fault_models:
         lines += [
             "- Fault model: each fault is drawn from the run's seeded generator with "
@@ -283,6 +299,7 @@ def _setup_section(
         )
     for (host, cpu, count), systems in sorted(machines.items()):
         lines.append(f"- Machine `{host}`: {cpu}, {count} CPUs; {'; '.join(sorted(systems))}.")
+    lines += _placement_lines(rows)
     if packages:
         lines.append(
             "- Packages: " + ", ".join(f"{n} {v}" for n, v in sorted(packages.items())) + "."
@@ -297,6 +314,24 @@ def _setup_section(
                 planners.append(f"{planner} ({', '.join(found)})")
         lines.append("- Planners: " + "; ".join(planners) + ".")
     return [*lines, ""]
+
+
+def _placement_lines(rows: list[dict[str, str]]) -> list[str]:
+    """Where the runs ran, from the rows themselves (each row's host and CPU model)."""
+    runs: dict[tuple[str, str], int] = defaultdict(int)
+    for row in rows:
+        runs[(row.get("host") or "", row.get("cpu_model") or "")] += 1
+    if not runs:
+        return []
+    places = [
+        f"`{host}` ({cpu or 'CPU not recorded'}): {count}"
+        for (host, cpu), count in sorted(runs.items())
+        if host
+    ]
+    unknown = sum(count for (host, _), count in runs.items() if not host)
+    if unknown:
+        places.append(f"not recorded (a run that took its worker down, or an older row): {unknown}")
+    return ["- Runs per machine (host, CPU model: runs): " + "; ".join(places) + "."]
 
 
 #: Engines that plan temporal problems (a run that used one played a timeline).
@@ -348,8 +383,8 @@ def write_report(
         "",
         "## Success rate by fault rate",
         "",
-        "| target | approach | fault rate | runs | goal reached | 95% CI | median wall time of successful runs (s) [95% CI] | mean wall time, all runs (s) | mean sim time of successful runs (s) | planning share | planner calls/run | replans/run | repairs/run |",
-        "|---|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|",
+        "| target | approach | fault rate | runs | goal reached | 95% CI | median wall time of successful runs (s) [95% CI] | mean wall time, all runs (s) | mean sim time of successful runs (s) | mean distance driven (m) | mean battery used (%) | planning share | planner calls/run | replans/run | repairs/run |",
+        "|---|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for s in summary:
         name = f"{s['target']} ({s['variant']})" if s["variant"] else s["target"]
@@ -362,6 +397,7 @@ def write_report(
             f"| {name} | {s['approach']} | {s['fault_rate']:g} | {s['runs']} | "
             f"{s['success_rate'] * 100:.0f}% | {s['ci_low'] * 100:.0f}-{s['ci_high'] * 100:.0f}% | "
             f"{median} | {s['mean_wall_time_all_s']:.3f} | {_num(s['mean_sim_time_s'], '.1f')} | "
+            f"{_reported(s['mean_distance_m'], '.1f')} | {_reported(s['mean_battery_used'], '.1f')} | "
             f"{s['planning_share'] * 100:.0f}% | {s['mean_planner_calls']:.2f} | "
             f"{s['mean_replans']:.2f} | {s['mean_repairs']:.2f} |"
         )
@@ -444,10 +480,10 @@ def _findings(
         planned = by.get((target, variant, "planned", top))
         scripted = by.get((target, variant, "scripted", top))
         if planned and scripted:
-            timed = any(
-                _engines(r) & TEMPORAL_ENGINES
-                for r in rows
-                if r["target"] == target and r["variant"] == variant
+            mine = [r for r in rows if r["target"] == target and r["variant"] == variant]
+            # A robot's world (it reports distances) keeps its own simulated clock.
+            timed = any(_engines(r) & TEMPORAL_ENGINES for r in mine) and not any(
+                r.get("distance_m") for r in mine
             )
             out.append(
                 f"  Median wall time of successful runs: planned "

@@ -39,6 +39,7 @@ __all__ = [
     "inapplicable",
     "is_temporal",
     "pin_hash_seed",
+    "placement",
     "read_results",
     "run_one",
     "run_study",
@@ -70,6 +71,10 @@ FIELDS = [
     "goal_reached",
     "wall_time_s",
     "sim_time_s",
+    # What a world that drives a robot reports (pyrobosim: metres driven, battery in
+    # percentage points used); empty for the others.
+    "distance_m",
+    "battery_used",
     "steps",
     "actions_executed",
     "actions_failed",
@@ -91,9 +96,10 @@ FIELDS = [
     # of the same spec (on another worker, machine or cluster).
     "host",
     "worker",
+    "cpu_model",
 ]
 #: Columns that may differ between two runs of the same spec; all others may not.
-VARYING_FIELDS = ("wall_time_s", "planning_time_s", "host", "worker")
+VARYING_FIELDS = ("wall_time_s", "planning_time_s", "host", "worker", "cpu_model")
 #: The hash seed of every process that runs the study's runs, and so of the planner
 #: processes they start: the planner process breaks ties between equally good plans in
 #: hash order (measured: pyperplan on fetch_drink picks another plan with another hash
@@ -243,10 +249,13 @@ def is_temporal(path: str, problem: str) -> bool:
 def _run(spec: RunSpec, clock: list[float]) -> dict[str, Any]:
     import smach
     from plan_bridge.missions.runner import MissionOptions, prepare_mission
+    from plan_bridge.missions.world_target import WorldTarget
 
     target = target_of(spec.target, spec.problem)
     task = target.task
-    temporal = is_temporal(spec.target, spec.problem)
+    # A pyrobosim world keeps its own simulated time (its clock orders the threads):
+    # it runs as fast as it goes, and its sim time is the world's.
+    temporal = is_temporal(spec.target, spec.problem) and not isinstance(target, WorldTarget)
     clock.append(time.monotonic())
     exits: list[Any] = []
 
@@ -269,6 +278,7 @@ def _run(spec: RunSpec, clock: list[float]) -> dict[str, Any]:
         outcome = machine.execute()
         numbers = world.figures()
         return {
+            **_robot_figures(numbers),
             "outcome": outcome,
             "goal_reached": bool(world.goal_reached()),
             "sim_time_s": round((time.monotonic() - began) / TEMPORAL_TIME_SCALE, 1)
@@ -305,6 +315,7 @@ def _run(spec: RunSpec, clock: list[float]) -> dict[str, Any]:
     decisions = [d["decision"] for d in report.decisions]
     failed = report.actions_failed
     return {
+        **_robot_figures(figures),
         "outcome": outcome,
         "goal_reached": bool(world.goal_reached()) if world is not None else report.goal_reached,
         "sim_time_s": sim_time,
@@ -330,6 +341,18 @@ def _run(spec: RunSpec, clock: list[float]) -> dict[str, Any]:
     }
 
 
+def _robot_figures(figures: dict[str, Any]) -> dict[str, Any]:
+    """The columns of a world that drives a robot ('' where the world has no such number)."""
+    return {key: figures.get(key, "") for key in ("distance_m", "battery_used")}
+
+
+def placement(worker: str) -> dict[str, str]:
+    """Where a row ran: this machine's host name and CPU model, and the worker."""
+    from plan_bridge.study.environment import cpu_model
+
+    return {"host": socket.gethostname(), "worker": worker, "cpu_model": cpu_model()}
+
+
 # -- the worker pool ----------------------------------------------------------------------------
 def _worker(tasks: Any, results: Any) -> None:
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
@@ -344,7 +367,7 @@ def _worker(tasks: Any, results: Any) -> None:
             return
         index, spec = item
         row = run_one(spec)
-        row.update(host=socket.gethostname(), worker=f"local pid {os.getpid()}")
+        row.update(placement(f"local pid {os.getpid()}"))
         results.put((index, row))
 
 
@@ -409,7 +432,7 @@ class _Pool:
                 else f"worker died (exit {worker.process.exitcode})",
                 now - worker.since,
             )
-            row.update(host=socket.gethostname(), worker=f"local pid {worker.process.pid}")
+            row.update(placement(f"local pid {worker.process.pid}"))
             self.workers[n] = self._start()
             on_result(spec, row)
 

@@ -231,3 +231,21 @@ def test_a_run_that_hangs_on_a_worker_is_recorded_as_timeout_and_the_others_fini
     # (new address) took its place.
     stuck = next(r["worker"] for r in rows if r["outcome"] == "timeout")
     assert stuck not in cluster.wait_for_workers(2).values()
+
+
+@pytest.mark.timeout(180)
+def test_each_cluster_row_records_its_worker_host_and_cpu_and_the_report_names_the_machines(
+    cluster: Cluster, tmp_path: Path
+) -> None:
+    from plan_bridge.study import write_report
+    from plan_bridge.study.environment import cpu_model
+
+    rows = run_study(specs(range(1)), tmp_path, cluster=cluster.address)
+    assert len(rows) == 4
+    # The workers run on this machine: its host name and CPU model, row by row.
+    assert {(r["host"], r["cpu_model"]) for r in rows} == {(socket.gethostname(), cpu_model())}
+    text = write_report(rows, tmp_path, [], "plan-bridge study rooms --cluster").read_text()
+    assert (
+        f"- Runs per machine (host, CPU model: runs): `{socket.gethostname()}` ({cpu_model()}): 4."
+        in text
+    )
