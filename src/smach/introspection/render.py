@@ -16,6 +16,7 @@ from smach.introspection.structure import StateNode
 __all__ = ["to_dot", "to_mermaid", "to_svg"]
 
 _ACTIVE = "#ffd54f"
+_ACTIVE_STROKE = "#f57f17"
 _CONTAINER_FILL = {"StateMachine": "#eef3fb", "Sequence": "#eef3fb", "Concurrence": "#f3eefb"}
 
 
@@ -53,12 +54,16 @@ def to_dot(root: StateNode, active: Collection[str] = ()) -> str:
             fill = _ACTIVE if node.path in active_set else "white"
             lines.append(f"{pad}{_q(node.path)} [label={_q(node.label)}, fillcolor={_q(fill)}];")
             return
-        style = "rounded,filled,bold" if node.path in active_set else "rounded,filled"
         fill = _CONTAINER_FILL.get(node.type, "#f5f5f5")
         lines.append(f"{pad}subgraph {_q('cluster_' + node.path)} {{")
+        if node.path in active_set:
+            # An active container: its frame in the active colour (its inside keeps the
+            # container's fill, so the active state inside it still stands out).
+            mark = f'style="rounded,filled,bold"; color={_q(_ACTIVE_STROKE)}; penwidth=2.5;'
+        else:
+            mark = 'style="rounded,filled";'
         lines.append(
-            f"{pad}  label={_q(f'{node.label} ({node.type})')}; style={_q(style)}; "
-            f"fillcolor={_q(fill)};"
+            f"{pad}  label={_q(f'{node.label} ({node.type})')}; {mark} fillcolor={_q(fill)};"
         )
         if not node.children:
             lines.append(f'{pad}  {_q(node.path + ":empty")} [label="(empty)", shape=plaintext];')
@@ -150,7 +155,7 @@ def to_mermaid(root: StateNode, active: Collection[str] = ()) -> str:
     classes_outcome: list[str] = []
     emit(root, 1)
     lines.append("    classDef outcome fill:#e0e0e0,stroke:#9e9e9e,font-size:10px")
-    lines.append(f"    classDef active fill:{_ACTIVE},stroke:#f57f17,stroke-width:2px")
+    lines.append(f"    classDef active fill:{_ACTIVE},stroke:{_ACTIVE_STROKE},stroke-width:2px")
     for oid in classes_outcome:
         lines.append(f"    class {oid} outcome")
     for aid in classes:

@@ -59,6 +59,16 @@ def test_dot_has_clusters_for_containers_and_edges_from_their_outcomes() -> None
     assert '"/ROOT/PAR/L" [label="L", fillcolor="#ffd54f"]' in dot
 
 
+def test_dot_frames_an_active_container_in_the_active_colour_and_no_other() -> None:
+    dot = smach.to_dot(smach.snapshot(nested()), active=["/ROOT", "/ROOT/PAR", "/ROOT/PAR/L"])
+    lines = dot.splitlines()
+    par = lines[lines.index('  subgraph "cluster_/ROOT" {') + 1 :]
+    frame = next(line for line in par if 'label="PAR (Concurrence)"' in line)
+    assert 'color="#f57f17"' in frame and "penwidth" in frame
+    idle = smach.to_dot(smach.snapshot(nested()), active=["/ROOT/START"])
+    assert 'color="#f57f17"' not in idle
+
+
 @pytest.mark.skipif(shutil.which("dot") is None, reason="Graphviz is not installed")
 def test_dot_output_is_accepted_by_graphviz() -> None:
     result = subprocess.run(
