@@ -96,6 +96,12 @@ def _configure_run(parser: argparse.ArgumentParser) -> None:
         "closed, an object moved; see docs/sim.md)",
     )
     parser.add_argument(
+        "--snapshot",
+        metavar="FILE.svg|.png",
+        help="with a pyrobosim world: when the run ends, write a picture of it (map, paths "
+        "driven, final poses; see docs/sim.md)",
+    )
+    parser.add_argument(
         "--viewer",
         nargs="?",
         const=0,
@@ -247,6 +253,12 @@ def _resume_arguments(
     return run, checkpoints[-1] if checkpoints else None
 
 
+def _is_world(target: Target) -> bool:
+    from plan_bridge.missions.world_target import WorldTarget
+
+    return isinstance(target, WorldTarget)
+
+
 def _world_options(args: argparse.Namespace, target: Target) -> dict[str, Any]:
     """The journal's record of a pyrobosim run's goal and events (see RESUMED_WORLD)."""
     from plan_bridge.missions.world_target import WorldTarget
@@ -296,6 +308,16 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
         return fail("--no-robot and --ros-prefix need --ros")
     if args.ros and args.resume:
         return fail("--resume cannot be combined with --ros (the robot's world is not journaled)")
+    if args.snapshot:
+        from plan_bridge.robosim.picture import picture_problem
+
+        problem = picture_problem(args.snapshot) or (
+            "--snapshot cannot be combined with --ros (the world lives in the robot's process)"
+            if args.ros
+            else None
+        )
+        if problem:
+            return fail(problem)
     try:
         # The same front-end verdict as `check` and `plan`, before anything heavy loads.
         chosen = resolve_input(args)
@@ -320,6 +342,8 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
         goal=args.goal,
         events=args.events,
     )
+    if args.snapshot and not _is_world(target):
+        return fail(f"--snapshot draws pyrobosim worlds only; {target.name} is not one")
     default_scale = VIEWER_TIME_SCALE if args.viewer is not None else 0.0
     options = MissionOptions(
         seed=args.seed,
@@ -413,6 +437,15 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
         print(json.dumps(figures, indent=None))
     if not args.quiet:
         print(_summary(outcome, report, figures.get("faults_injected")), file=out, flush=True)
+    if args.snapshot:
+        from plan_bridge.robosim.picture import picture_title, write_picture
+        from plan_bridge.robosim.world import RobosimWorld
+
+        if isinstance(mission.world, RobosimWorld):
+            goal = getattr(target, "goal_text", "")
+            title = picture_title(target.name, goal, outcome or "stopped", figures)
+            written = write_picture(mission.world, args.snapshot, title)
+            print(f"picture: {written}", file=sys.stderr, flush=True)
     if args.quiet and not report.goal_reached:
         # No silent end: why the mission stopped (the summary says it without --quiet).
         print(f"plan-bridge: goal not reached: {report.explanation}", file=sys.stderr)

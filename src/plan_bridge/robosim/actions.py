@@ -103,6 +103,9 @@ def follow(
 
         result = world.run_blocking(robot, call, preempted)
     driven = _driven(traj, interp, robot, before, head is path, result)
+    if traj is not None:
+        passed = (p for t, p in zip(traj.t_pts, traj.poses, strict=True) if 0 < t < driven[0])
+        world.record_drive(robot, [before, *passed, robot.get_pose()])
     world.distance_m += driven[1]
     world.count_drive(robot, level_before, driven[1])
     world.elapse(driven[0] if not split or result.status != "SUCCESS" else event_at - start)

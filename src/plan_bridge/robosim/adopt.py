@@ -68,7 +68,9 @@ def adopt_step(world: RobosimWorld, step: PlanStep, observations: Sequence[Obser
     if action in ("navigate", "cross"):
         robot = world.robot(args[0])
         before = world.spot_of(robot)
+        start = robot.get_pose()
         _put_robot(world, robot, args[2])
+        world.record_drive(robot, [start, robot.get_pose()])
         drained = world.model.distance(before, args[2]) if before in world.model.spots else 0.0
         info = next(r for r in world.model.robots if r.name == robot.name)
         robot.battery_level = max(0.0, float(robot.battery_level) - info.drain * drained)
@@ -156,6 +158,9 @@ def snapshot_world(world: RobosimWorld) -> dict[str, Any]:
         "actions_run": world.actions_run,
         "faults": world.faults,
         "distance_m": world.distance_m,
+        "trails": {
+            name: [list(map(list, part)) for part in parts] for name, parts in world.trails.items()
+        },
         "battery_start": dict(world.battery_start),
         "charged": dict(world.charged),
         "searched": sorted(world.searched),
@@ -199,6 +204,10 @@ def restore_world(world: RobosimWorld, data: dict[str, Any]) -> None:
     world.actions_run = int(data["actions_run"])
     world.faults = int(data["faults"])
     world.distance_m = float(data["distance_m"])
+    # (Snapshots written before trails were recorded lack them: the trails start here.)
+    world.trails = {r.name: [] for r in world.sim.robots}
+    for name, parts in data.get("trails", {}).items():
+        world.trails[name] = [[[float(x), float(y)] for x, y in part] for part in parts]
     # (Snapshots written before battery use was counted lack these: the world's own.)
     world.battery_start.update({k: float(v) for k, v in data.get("battery_start", {}).items()})
     world.charged.update({k: float(v) for k, v in data.get("charged", {}).items()})

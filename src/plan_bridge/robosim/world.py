@@ -104,6 +104,9 @@ class RobosimWorld:
         self.faults = 0
         self.distance_m = 0.0
         """Metres the robots drove (their executed paths, stops on the way included)."""
+        self.trails: dict[str, list[list[list[float]]]] = {r.name: [] for r in self.sim.robots}
+        """Each robot's executed drives: polylines of ``[x, y]`` points (metres), one per
+        stretch driven without a jump (for :mod:`.picture`; kept in snapshots)."""
         self.battery_start = {r.name: float(r.battery_level) for r in self.sim.robots}
         self.charged: dict[str, float] = dict.fromkeys(self.battery_start, 0.0)
         """Battery (percent) each robot's charges put back."""
@@ -468,6 +471,20 @@ class RobosimWorld:
         if level > expected + 1e-6:
             with self._lock:
                 self.charged[robot.name] += level - expected
+
+    def record_drive(self, robot: Any, points: Iterable[Any]) -> None:
+        """Add the poses a robot passed (``.x``, ``.y``) to its trail: continuing its last
+        stretch when they start where it ended, else as a new one."""
+        xy = [[round(float(p.x), 3), round(float(p.y), 3)] for p in points]
+        xy = [p for i, p in enumerate(xy) if i == 0 or p != xy[i - 1]]
+        if len(xy) < 2:
+            return
+        with self._lock:
+            trail = self.trails.setdefault(robot.name, [])
+            if trail and math.dist(trail[-1][-1], xy[0]) < 0.05:
+                trail[-1].extend(xy[1:])
+            else:
+                trail.append(xy)
 
     def close(self) -> None:
         """Stop pyrobosim's threads (sensors, path validation)."""

@@ -13,12 +13,19 @@ from plan_bridge.cli import main
 
 ROOT = Path(__file__).parents[3]
 FETCH = ROOT / "domains" / "fetch_drink"
+#: `./dev run`'s main job (the pyrobosim mission, a hallway closing), without the picture.
+MAIN_JOB = [
+    "run",
+    "domains/robosim_fetch",
+    "--events",
+    "domains/robosim_fetch/events/close_hallway.yaml",
+]
 
 
 def readme_sample() -> list[str]:
     """The main job's output as README.md shows it (the block after `./dev run`)."""
     text = (ROOT / "README.md").read_text()
-    block = re.search(r"```\n(plan-bridge run: fetch_drink.*?)```", text, re.S)
+    block = re.search(r"```\n(plan-bridge run: robosim_fetch.*?)```", text, re.S)
     assert block is not None, "README.md has no sample of the main job's output"
     return block.group(1).splitlines()
 
@@ -70,15 +77,22 @@ def test_verbose_output_adds_the_states_each_step_enters(
 
 @pytest.mark.timeout(120)
 def test_the_readme_shows_what_the_default_main_job_prints(
-    capsys: pytest.CaptureFixture[str],
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch, tmp_path: Path
 ) -> None:
-    assert main(["run", str(FETCH)]) == 0
+    pytest.importorskip("pyrobosim", reason="pyrobosim is not installed (the sim extra)")
+    dev = (ROOT / "dev").read_text()
+    assert " ".join(MAIN_JOB[1:]) in " ".join(dev.replace("\\\n", " ").split())
+    monkeypatch.chdir(ROOT)
+    picture = tmp_path / "run.svg"
+    assert main([*MAIN_JOB, "--snapshot", str(picture)]) == 0
     lines = iter(capsys.readouterr().err.splitlines())
     for sample in readme_sample():
         if sample.strip() == "...":
             continue
+        # Where ./dev run writes the picture, here tmp_path.
+        expected = f"picture: {picture}" if sample.startswith("picture: ") else sample
         # Each sample line is printed, in this order (lines between them may be elided).
-        assert any(re.fullmatch(pattern(sample), line) for line in lines), sample
+        assert any(re.fullmatch(pattern(expected), line) for line in lines), sample
 
 
 def failed_steps_and_recover_lines(lines: list[str]) -> tuple[int, int]:
