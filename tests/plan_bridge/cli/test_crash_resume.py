@@ -49,7 +49,10 @@ def _kill_after_lines(journal: Path, lines: int, seed: int) -> bool:
     if _journal_shows(process, journal, lambda data: data.count(b"\n") >= lines):
         os.kill(process.pid, signal.SIGKILL)
     process.wait(30)
-    return process.returncode == -signal.SIGKILL
+    # A kill that lands after the summary was written (the process was shutting down)
+    # did not cut the run: it finished before the kill point.
+    finished = b'{"kind": "summary"' in journal.read_bytes() if journal.exists() else False
+    return process.returncode == -signal.SIGKILL and not finished
 
 
 def _journal_shows(
