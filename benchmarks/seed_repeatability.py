@@ -4,6 +4,7 @@ Usage::
 
     .venv/bin/python benchmarks/seed_repeatability.py                  # 12 configurations x 5
     .venv/bin/python benchmarks/seed_repeatability.py --repeats 3 --busy 2 --json out.json
+    .venv/bin/python benchmarks/seed_repeatability.py --dispatch-cost 11   # what turns cost
 
 Configurations: ``domains/timed_courier`` (a temporal plan: steps run in the temporal
 dispatcher's threads) problems p01 and p02, and ``domains/two_robot_delivery
@@ -119,6 +120,41 @@ def summary(run: dict[str, Any]) -> str:
     )
 
 
+def dispatch_cost(runs: int) -> dict[str, float]:
+    """Median wall milliseconds of dispatching timed_courier p01's plan (no faults,
+    TimedWorld skills, no listeners) on the world's simulated clock and on the wall
+    clock, ``runs`` each, alternating: what taking turns costs."""
+    import statistics
+
+    from plan_bridge.execution.clock import WALL_CLOCK
+    from plan_bridge.execution.semantics import ActionModel
+    from plan_bridge.execution.temporal import compile_temporal
+    from plan_bridge.execution.timed_world import TimedWorld, timed_skills
+    from plan_bridge.execution.world import WorldState
+    from plan_bridge.pddl.task import load_task
+    from plan_bridge.planning.planner import get_planner
+
+    courier = ROOT / "domains" / "timed_courier"
+    task = load_task(courier / "domain.pddl", courier / "problems" / "p01.pddl")
+    plan = get_planner("auto").solve(task, timeout=60).actions
+    times: dict[str, list[float]] = {"simulated clock": [], "wall clock": []}
+    for n in range(runs):
+        for name, samples in times.items():
+            world = TimedWorld(task, seed=n)
+            model = ActionModel(task)
+            belief = WorldState(task.initial_facts, model.initial_values())
+            clock = None if name == "simulated clock" else WALL_CLOCK  # None: the world's
+            compiled = compile_temporal(
+                plan, timed_skills(world), model, belief, world=world, clock=clock
+            )
+            began = time.perf_counter()
+            outcome = compiled.machine.execute()
+            samples.append(time.perf_counter() - began)
+            if outcome != "succeeded":
+                raise SystemExit(f"the dispatch on the {name} ended {outcome}")
+    return {name: statistics.median(samples) * 1000 for name, samples in times.items()}
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--repeats", type=int, default=5, help="runs per configuration")
@@ -128,7 +164,20 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--time-scale", type=float, default=0.0)
     parser.add_argument("--busy", type=int, default=1, help="busy processes beside the runs")
     parser.add_argument("--json", metavar="FILE")
+    parser.add_argument(
+        "--dispatch-cost",
+        type=int,
+        metavar="RUNS",
+        help="instead: time timed_courier p01's dispatch on the simulated and the wall clock",
+    )
     args = parser.parse_args(argv)
+    if args.dispatch_cost:
+        medians = dispatch_cost(args.dispatch_cost)
+        print(
+            f"timed_courier p01 dispatch, median of {args.dispatch_cost}: "
+            + ", ".join(f"{name} {ms:.1f} ms" for name, ms in medians.items())
+        )
+        return 0
     if args.repeats < 2:
         parser.error("--repeats must be at least 2 (a run is compared with its repeats)")
     seeds = [int(s) for s in args.seeds.split(",") if s]

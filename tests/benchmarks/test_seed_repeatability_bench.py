@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -42,3 +43,18 @@ def test_seed_repeatability_needs_two_runs_to_compare() -> None:
     )  # fmt: skip
     assert proc.returncode == 2
     assert "--repeats must be at least 2" in proc.stderr
+
+
+@pytest.mark.timeout(120)
+def test_seed_repeatability_times_the_dispatch_on_both_clocks() -> None:
+    proc = subprocess.run(
+        [sys.executable, str(ROOT / "benchmarks" / "seed_repeatability.py"),
+         "--dispatch-cost", "2"],
+        cwd=ROOT, capture_output=True, text=True, timeout=110, check=False,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert re.fullmatch(
+        r"timed_courier p01 dispatch, median of 2: simulated clock [\d.]+ ms, "
+        r"wall clock [\d.]+ ms\n",
+        proc.stdout,
+    )

@@ -355,13 +355,12 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
         concurrent=args.concurrent,
         time_scale=default_scale if args.time_scale is None else args.time_scale,
     )
-    fail_rate = args.fail_rate
-    if fail_rate is None:
-        fail_rate = DEFAULT_FAIL_RATE if target.has_own_skills else 0.0
+    fail_rate = options.fail_rate_for(target)
     skills_text = "domain skills" if target.has_own_skills else "symbolic skills"
     if target.skill_map_path is not None:
         skills_text += f" and {target.skill_map_path.name}"
     setup = None
+    robot_prefix = ""
     if args.ros:
         # The skills run on the robot node, against its world: nothing is simulated here.
         robot = _connect_robot(
@@ -375,6 +374,7 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
             skills=robot.skills(), world=robot.world(), concurrent=robot.concurrent
         )
         skills_text = f"{robot.robot_info.get('mode')} on the robot node /{robot.prefix}"
+        robot_prefix = robot.prefix
     mission = prepare_mission(target, options, setup=setup, planner=planners[0])
     executive = mission.executive
     if checkpoint is not None:
@@ -400,7 +400,7 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
         run_options.update(_world_options(args, target))
         if args.ros:
             # The robot's world lives in its process: checkpoints hold no world snapshot.
-            run_options["ros"] = args.ros_prefix or True
+            run_options["ros"] = robot_prefix
         journal = mission.record(
             journal_path, header={**run_options, "run": run_options}, append=bool(args.resume)
         )

@@ -165,13 +165,7 @@ class TimedWorld(SimulatedWorld):
     def readings(self, ground: GroundAction) -> list[Reading]:
         """What a robot sees of the atoms and numbers ``ground`` touches."""
         with self._lock:
-            state = self.state_now()
-            adds, dels, values = ground.all_effects(state)
-            atoms = set(ground.precondition_atoms() or ()) | adds | dels
-            out: list[Reading] = [(fact, fact in state) for fact in sorted(atoms)]
-            numbers = values_of(state)
-            out.extend((atom, numbers[atom]) for atom in sorted(values) if atom in numbers)
-        return out
+            return self._readings(ground, self.state_now())
 
 
 class TimedSkill(smach.State):

@@ -61,6 +61,12 @@ class MissionOptions:
     variant: str = ""
     """A variant of the domain's world (``plan-bridge study --variant``)."""
 
+    def fail_rate_for(self, target: Target) -> float:
+        """:attr:`fail_rate`, or its default for ``target`` when none was given."""
+        if self.fail_rate is not None:
+            return self.fail_rate
+        return DEFAULT_FAIL_RATE if target.has_own_skills else 0.0
+
 
 @dataclass
 class Mission:
@@ -195,9 +201,7 @@ def prepare_mission(
         policy = replace(policy, max_replans=options.max_replans)
     if options.planner_timeout is not None:
         policy = replace(policy, planner_timeout=options.planner_timeout)
-    fail_rate = options.fail_rate
-    if fail_rate is None:
-        fail_rate = DEFAULT_FAIL_RATE if target.has_own_skills else 0.0
+    fail_rate = options.fail_rate_for(target)
     if setup is None:
         setup = target.setup(seed=options.seed, fail_rate=fail_rate, variant=options.variant)
     problems = setup.skills.check(target.task)

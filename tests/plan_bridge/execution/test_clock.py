@@ -3,15 +3,14 @@ simulated time, so that what threads do on it comes in one order whatever the th
 
 from __future__ import annotations
 
-import contextlib
-import sys
 import threading
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
 from types import SimpleNamespace
 
 import pytest
+from thread_load import busy_thread
 
 from plan_bridge.execution import clock as clock_module
 from plan_bridge.execution.clock import WALL_CLOCK, SimClock, WallClock, clock_of
@@ -21,28 +20,6 @@ from plan_bridge.pddl.task import load_task
 pytestmark = pytest.mark.timeout(60)
 
 COURIER = Path(__file__).resolve().parents[3] / "domains" / "timed_courier"
-
-
-@contextlib.contextmanager
-def busy_thread() -> Iterator[None]:
-    """A thread spinning beside the test, with thread switches as often as Python
-    allows: the participants' threads run in whatever order the scheduler picks."""
-    stop = threading.Event()
-
-    def spin() -> None:
-        while not stop.is_set():
-            pass
-
-    interval = sys.getswitchinterval()
-    sys.setswitchinterval(1e-6)
-    spinner = threading.Thread(target=spin, daemon=True)
-    spinner.start()
-    try:
-        yield
-    finally:
-        stop.set()
-        spinner.join()
-        sys.setswitchinterval(interval)
 
 
 def run_participants(

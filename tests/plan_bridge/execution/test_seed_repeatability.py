@@ -12,13 +12,11 @@ from __future__ import annotations
 import contextlib
 import io
 import json
-import sys
-import threading
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
+from thread_load import busy_thread
 
 from plan_bridge.cli import main
 
@@ -26,26 +24,6 @@ pytestmark = pytest.mark.timeout(300)
 
 DOMAINS = Path(__file__).resolve().parents[3] / "domains"
 COMPARED = ("executed", "decisions", "outcome", "goal_reached", "faults_injected", "actions_failed")
-
-
-@contextlib.contextmanager
-def busy_thread() -> Iterator[None]:
-    stop = threading.Event()
-
-    def spin() -> None:
-        while not stop.is_set():
-            pass
-
-    interval = sys.getswitchinterval()
-    sys.setswitchinterval(1e-5)
-    spinner = threading.Thread(target=spin, daemon=True)
-    spinner.start()
-    try:
-        yield
-    finally:
-        stop.set()
-        spinner.join()
-        sys.setswitchinterval(interval)
 
 
 def run(*argv: str) -> dict[str, Any]:
@@ -68,7 +46,7 @@ def test_a_seeded_run_repeats_exactly_with_a_busy_thread_beside_it(argv: tuple[s
     first = run(*argv)
     assert first["executed"] and first["faults_injected"] > 0  # faults met, steps run
     assert first["sim_time_s"] > 0  # the world's clock moved
-    with busy_thread():
+    with busy_thread(1e-5):
         again = [run(*argv) for _ in range(3)]
     for other in again:
         assert other == first
