@@ -73,6 +73,7 @@ def load_world_file(path: str | Path) -> Any:
     finally:
         logging.disable(disabled)
     quiet(world)
+    stop_sensors(world)
     if not world.robots:
         raise WorldFileError(f"{file}: the world has no robot (robots: - name: robot ...)")
     return world
@@ -82,6 +83,15 @@ def quiet(world: Any) -> None:
     """Turn the loggers of ``world`` and its robots down to WARNING."""
     for logger in (world.logger, *(robot.logger for robot in world.robots)):
         logger.setLevel(logging.WARNING)
+
+
+def stop_sensors(world: Any) -> None:
+    """Stop the robots' sensor threads (lidar, field of view) that pyrobosim starts on
+    load: the skills do not read them, they cost CPU all run long, and they are not
+    daemon threads, so a process would never exit while they run."""
+    for robot in world.robots:
+        for sensor in robot.sensors.values():
+            sensor.stop_thread()
 
 
 @contextlib.contextmanager

@@ -1,0 +1,282 @@
+"""Building blocks for missions written by hand over the robosim skills.
+
+The scripted baselines of the pyrobosim worlds (``domains/robosim_*/scripted.py``) are
+SMACH machines their authors wrote without a planner. They drive the same skill
+machines as the planned missions (:func:`~plan_bridge.robosim.skills.skill_for`) in
+the same :class:`~plan_bridge.robosim.world.RobosimWorld`, with the recoveries a careful
+author anticipates, built from these states:
+
+* :class:`Drive` goes to a spot leg by leg on the shortest way not known blocked
+  (:func:`route`), tries each leg three times, opens a closed door it finds on its way
+  (a hallway closed but not locked), and gives up on a hallway it finds locked or
+  cannot open (``blocked``: the caller looks for another way);
+* :class:`CheckBattery` says whether the battery covers the trip and the way from its
+  end to a charger;
+* :class:`Act` runs one action (pick, place, open, close, charge, detect), tried three
+  times; opening what is open already is done at once;
+* :func:`go_to` chains them: check the battery, charge first when it is low, drive,
+  and look for another way when blocked.
+
+The machines share the userdata keys ``blocked`` (hallways known impassable) and
+``legs`` (the legs driven, for reports).
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+from collections.abc import Iterable
+from typing import Any
+
+import smach
+from plan_bridge.robosim.skills import skill_for
+from plan_bridge.robosim.world import RobosimWorld
+
+__all__ = [
+    "ATTEMPTS",
+    "RESERVE",
+    "Act",
+    "CheckBattery",
+    "Drive",
+    "SkillState",
+    "charger_spot",
+    "go_to",
+    "route",
+    "route_length",
+]
+
+#: Tries of one drive leg or action before a state gives up.
+ATTEMPTS = 3
+#: Battery (percent) a robot keeps in hand on top of the trip and the way to a charger.
+RESERVE = 5.0
+_FULL = 99.9
+
+
+def route(world: RobosimWorld, start: str, goal: str, blocked: Iterable[str]) -> list[str] | None:
+    """The shortest chain of spots from ``start`` to ``goal`` on the map: spots of one
+    room are joined by drives, a hallway's two ends by its crossing (not ``blocked``
+    ones); None when there is no way."""
+    model = world.model
+    shut = set(blocked)
+    ends = {frozenset(pair): hall for hall, pair in model.hall_ends.items() if hall not in shut}
+    best = {start: 0.0}
+    before: dict[str, str] = {}
+    queue = [(0.0, start)]
+    while queue:
+        cost, spot = heapq.heappop(queue)
+        if spot == goal:
+            chain = [goal]
+            while chain[-1] != start:
+                chain.append(before[chain[-1]])
+            return chain[::-1]
+        if cost > best[spot]:
+            continue
+        room = model.spots[spot].room
+        for other in model.spots.values():
+            joined = other.room == room or frozenset((spot, other.name)) in ends
+            if other.name == spot or not joined:
+                continue
+            step = cost + model.distance(spot, other.name)
+            if step < best.get(other.name, float("inf")):
+                best[other.name], before[other.name] = step, spot
+                heapq.heappush(queue, (step, other.name))
+    return None
+
+
+def route_length(world: RobosimWorld, chain: list[str] | None) -> float:
+    """Metres of a chain of spots (infinite for no chain)."""
+    if chain is None:
+        return float("inf")
+    return sum(world.model.distance(a, b) for a, b in itertools.pairwise(chain))
+
+
+def charger_spot(world: RobosimWorld) -> str | None:
+    """The first spawn of a charger of the world (None: the world has no charger)."""
+    return next(
+        (g.spawns[0] for g in world.model.gates.values() if g.is_charger and g.spawns), None
+    )
+
+
+class SkillState(smach.State):
+    """A state of ``robot`` that runs robosim skill machines; a preempt reaches the one
+    running."""
+
+    def __init__(self, world: RobosimWorld, robot: str, **keys: Any) -> None:
+        super().__init__(**keys)
+        self.world = world
+        self.robot = robot
+        self._running: smach.State | None = None
+
+    def skill(self, action: str, *args: str) -> str:
+        """Run the skill of ``(action robot *args)``; its outcome."""
+        machine = skill_for(self.world, action, self.robot, *args)
+        self._running = machine
+        try:
+            return str(machine.execute())
+        finally:
+            self._running = None
+
+    def request_preempt(self) -> None:
+        super().request_preempt()
+        running = self._running
+        if running is not None:
+            running.request_preempt()
+
+    def here(self) -> str:
+        """The spot the robot is at (its room's spot when between spots)."""
+        return self.world.spot_of(self.world.robot(self.robot))
+
+    def gate_seen(self, gate: str) -> tuple[bool | None, bool | None]:
+        """(open, locked) of a hallway or location as the robot sees it from where it
+        is (None: it cannot see it from here)."""
+        seen = dict(self.world.observe(self.world.robot(self.robot), [gate]))
+        key = gate.lower()
+        return seen.get(("isopen", key)), seen.get(("islocked", key))
+
+
+class CheckBattery(SkillState):
+    """Enough battery for the trip to ``goal`` and from there to ``charger``: ``enough``;
+    else ``low``; no way at all to the goal: ``no_way``. A robot with a full battery, or
+    in a world without a charger, always has ``enough`` (charging cannot help)."""
+
+    def __init__(self, world: RobosimWorld, robot: str, goal: str, charger: str | None) -> None:
+        super().__init__(world, robot, outcomes=["enough", "low", "no_way"], input_keys=["blocked"])
+        self.goal, self.charger = goal, charger
+
+    def execute(self, ud: smach.UserData) -> str:
+        blocked = set(ud.blocked)
+        trip = route_length(self.world, route(self.world, self.here(), self.goal, blocked))
+        if trip == float("inf"):
+            return "no_way"
+        if self.charger is None:
+            return "enough"
+        back = route_length(self.world, route(self.world, self.goal, self.charger, blocked))
+        info = next(r for r in self.world.model.robots if r.name == self.robot)
+        need = info.drain * (trip + (0.0 if back == float("inf") else back)) + RESERVE
+        level = float(self.world.robot(self.robot).battery_level)
+        return "enough" if level >= need or level >= _FULL else "low"
+
+
+class Drive(SkillState):
+    """Drive to ``goal`` leg by leg on the shortest way not known blocked, each leg tried
+    three times. Before a crossing, a door seen closed is opened; a hallway seen locked,
+    or one that would not open or stays impassable, is added to ``blocked`` and the
+    state ends ``blocked`` (find another way)."""
+
+    def __init__(self, world: RobosimWorld, robot: str, goal: str) -> None:
+        super().__init__(
+            world,
+            robot,
+            outcomes=["arrived", "blocked", "failed", "preempted"],
+            io_keys=["blocked", "legs"],
+        )
+        self.goal = goal
+
+    def execute(self, ud: smach.UserData) -> str:
+        chain = route(self.world, self.here(), self.goal, ud.blocked)
+        if chain is None:
+            return "blocked"
+        halls = {frozenset(pair): hall for hall, pair in self.world.model.hall_ends.items()}
+        for origin, target in itertools.pairwise(chain):
+            hall = halls.get(frozenset((origin, target)))
+            leg = ("cross", origin, target, hall) if hall else ("navigate", origin, target)
+            for _ in range(ATTEMPTS):
+                if self.preempt_requested():
+                    self.service_preempt()
+                    return "preempted"
+                if hall is not None and not self._door_passable(hall, origin):
+                    return self._block(ud, hall)
+                outcome = self.skill(*leg)
+                ud.legs = [*ud.legs, " ".join(leg)]
+                if outcome == "preempted":
+                    return "preempted"
+                if outcome == "succeeded" and self.here() == target:
+                    break
+                shut = self._locked_halls()
+                if shut - set(ud.blocked):
+                    ud.blocked = sorted({*ud.blocked, *shut})
+                    return "blocked"
+            else:
+                return self._block(ud, hall) if hall is not None else "failed"
+        return "arrived"
+
+    def _door_passable(self, hall: str, door: str) -> bool:
+        """At the door ``door`` of ``hall``: open it if it is closed (three tries);
+        False when it is locked or would not open."""
+        is_open, locked = self.gate_seen(hall)
+        if is_open is not False:
+            return True
+        if locked:
+            return False
+        for _ in range(ATTEMPTS):
+            if self.skill("open", hall, door) == "succeeded":
+                return True
+            if self.gate_seen(hall)[1]:
+                return False
+        return False
+
+    def _block(self, ud: smach.UserData, hall: str) -> str:
+        ud.blocked = sorted({*ud.blocked, hall})
+        return "blocked"
+
+    def _locked_halls(self) -> set[str]:
+        """The hallways the robot sees closed and locked from where it is."""
+        seen = dict(
+            self.world.observe(self.world.robot(self.robot), list(self.world.model.hall_ends))
+        )
+        return {
+            hall
+            for hall in self.world.model.hall_ends
+            if seen.get(("isopen", hall.lower())) is False
+            and seen.get(("islocked", hall.lower())) is not False
+        }
+
+
+class Act(SkillState):
+    """One action of the robot, tried three times; opening what is open (or closing
+    what is closed) is done at once."""
+
+    def __init__(self, world: RobosimWorld, robot: str, action: str, *args: str) -> None:
+        super().__init__(world, robot, outcomes=["done", "failed", "preempted"])
+        self.action, self.args = action, args
+
+    def execute(self, ud: smach.UserData) -> str:
+        if self.action in ("open", "close"):
+            is_open = bool(self.world.sim.get_entity_by_name(self.args[0]).is_open)
+            if is_open == (self.action == "open"):
+                return "done"
+        for _ in range(ATTEMPTS):
+            outcome = self.skill(self.action, *self.args)
+            if outcome in ("succeeded", "preempted"):
+                return "done" if outcome == "succeeded" else "preempted"
+        return "failed"
+
+
+def go_to(
+    world: RobosimWorld, robot: str, goal: str, charger: str | None = None
+) -> smach.StateMachine:
+    """``CHECK_BATTERY -> DRIVE`` (another way when blocked), charging first when the
+    battery is low: outcomes ``arrived``, ``failed``, ``preempted``."""
+    sm = smach.StateMachine(
+        outcomes=["arrived", "failed", "preempted"],
+        input_keys=["blocked", "legs"],
+        output_keys=["blocked", "legs"],
+    )
+    with sm:
+        smach.StateMachine.add(
+            "CHECK_BATTERY",
+            CheckBattery(world, robot, goal, charger),
+            {"enough": "DRIVE", "low": "TO_CHARGER" if charger else "DRIVE", "no_way": "failed"},
+        )
+        smach.StateMachine.add("DRIVE", Drive(world, robot, goal), {"blocked": "CHECK_BATTERY"})
+        if charger is not None:
+            location = world.model.spots[charger].gate or ""
+            smach.StateMachine.add(
+                "TO_CHARGER",
+                Drive(world, robot, charger),
+                {"arrived": "CHARGE", "blocked": "failed"},
+            )
+            smach.StateMachine.add(
+                "CHARGE", Act(world, robot, "charge", charger, location), {"done": "CHECK_BATTERY"}
+            )
+    return sm
