@@ -131,7 +131,11 @@ class SkillState(smach.State):
         is (None: it cannot see it from here)."""
         seen = dict(self.world.observe(self.world.robot(self.robot), [gate]))
         key = gate.lower()
-        return seen.get(("isopen", key)), seen.get(("islocked", key))
+        is_open, locked = seen.get(("isopen", key)), seen.get(("islocked", key))
+        return (
+            None if is_open is None else bool(is_open),
+            None if locked is None else bool(locked),
+        )
 
 
 class CheckBattery(SkillState):
