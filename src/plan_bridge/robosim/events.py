@@ -8,6 +8,13 @@ An events file is a YAML list::
     - at: 20
       move: apple0         # an object ...
       to: table0_tabletop  # ... onto an object spawn (or a location)
+    - at: [10, 40]         # a time drawn from the run's seed, between 10 and 40 s
+      close: hall_kitchen_office
+
+A time window ``[LO, HI]`` is drawn once per run, uniformly, from the run's seed
+(:meth:`WorldEvent.drawn`): a seeded run repeats, other seeds close the door at other
+moments. Items with the same window get the same time (a hallway closed and locked
+together).
 
 :func:`load_events` reads one (errors name the file, the item and its line, and what
 is allowed); :meth:`~plan_bridge.robosim.world.RobosimWorld.schedule` takes events from
@@ -17,8 +24,9 @@ Python. The world applies an event when its clock passes ``at`` (see docs/sim.md
 from __future__ import annotations
 
 import math
+import random
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -31,7 +39,8 @@ __all__ = ["KINDS", "EventError", "WorldEvent", "check_events", "load_events", "
 KINDS = ("open", "close", "lock", "unlock", "move")
 _ALLOWED = (
     "each item is a mapping with at: SECONDS and one of open: NAME, close: NAME, lock: NAME, "
-    "unlock: NAME (a hallway or location) or move: OBJECT with to: SPAWN"
+    "unlock: NAME (a hallway or location) or move: OBJECT with to: SPAWN; at: is seconds "
+    "or a window [LO, HI] drawn from the run's seed"
 )
 
 
@@ -49,13 +58,27 @@ class WorldEvent:
     to: str | None = None
     origin: str = ""
     """Where it was written (``events.yaml:3``), for messages."""
+    window: tuple[float, float] | None = None
+    """``at: [LO, HI]``: the time is drawn from the run's seed (:meth:`drawn`); until
+    then ``at`` is ``LO``."""
+
+    def drawn(self, seed: int) -> WorldEvent:
+        """This event at its time for a run with ``seed``: a window's time is drawn
+        uniformly in it (the same for every event of that window and seed)."""
+        if self.window is None:
+            return self
+        low, high = self.window
+        at = round(random.Random(f"world-event:{seed}:{low!r}:{high!r}").uniform(low, high), 3)
+        return replace(self, at=at, window=None)
 
     def describe(self) -> str:
         where = f" to {self.to}" if self.to else ""
-        return f"{self.kind} {self.target}{where} at {self.at:g} s"
+        when = f"{self.at:g} s" if self.window is None else "[{:g}, {:g}] s".format(*self.window)
+        return f"{self.kind} {self.target}{where} at {when}"
 
     def to_json(self) -> dict[str, Any]:
-        data: dict[str, Any] = {"at": self.at, self.kind: self.target}
+        at: float | list[float] = self.at if self.window is None else list(self.window)
+        data: dict[str, Any] = {"at": at, self.kind: self.target}
         if self.to is not None:
             data["to"] = self.to
         return data
@@ -104,9 +127,7 @@ def _event(item: Any, where: str) -> WorldEvent:
     if unknown:
         hint = did_you_mean(unknown[0], (*KINDS, "at", "to"))
         raise EventError(f"{where}: unknown key {unknown[0]!r}{hint}; {_ALLOWED}")
-    at = item.get("at")
-    if isinstance(at, bool) or not isinstance(at, (int, float)) or not math.isfinite(at) or at < 0:
-        raise EventError(f"{where}: at: must be a number of seconds >= 0, got {at!r}; {_ALLOWED}")
+    at, window = _time(item.get("at"), where)
     kinds = [k for k in KINDS if k in item]
     if len(kinds) != 1:
         said = f"both {kinds[0]} and {kinds[1]}" if kinds else "no change"
@@ -123,7 +144,32 @@ def _event(item: Any, where: str) -> WorldEvent:
             raise EventError(f"{where}: move: {target} needs to: SPAWN (where the object goes)")
     elif to is not None:
         raise EventError(f"{where}: to: goes with move: only; {_ALLOWED}")
-    return WorldEvent(float(at), kind, target, to, where)
+    return WorldEvent(at, kind, target, to, where, window)
+
+
+def _seconds(value: Any) -> bool:
+    return (
+        not isinstance(value, bool)
+        and isinstance(value, (int, float))
+        and math.isfinite(value)
+        and value >= 0
+    )
+
+
+def _time(at: Any, where: str) -> tuple[float, tuple[float, float] | None]:
+    """``at:`` as (seconds, window): a number, or a window ``[LO, HI]``."""
+    if _seconds(at):
+        return float(at), None
+    if isinstance(at, list) and len(at) == 2 and all(_seconds(v) for v in at):
+        low, high = float(at[0]), float(at[1])
+        if low > high:
+            raise EventError(
+                f"{where}: at: [{at[0]}, {at[1]}]: the window's start is after its end"
+            )
+        return low, (low, high)
+    raise EventError(
+        f"{where}: at: must be seconds >= 0 or a window [LO, HI] of them, got {at!r}; {_ALLOWED}"
+    )
 
 
 def check_events(

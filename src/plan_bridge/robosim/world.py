@@ -139,8 +139,9 @@ class RobosimWorld:
             robot.action_execution_options = own
 
     def schedule(self, events: Iterable[WorldEvent]) -> None:
-        """Add events (their names are checked against the world: :class:`EventError`)."""
-        new = list(events)
+        """Add events (their names are checked against the world: :class:`EventError`);
+        a time window is drawn from the run's seed."""
+        new = [event.drawn(self.seed) for event in events]
         check_events(
             new,
             self.model.gates,

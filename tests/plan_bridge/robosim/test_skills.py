@@ -115,7 +115,7 @@ def test_a_preempt_cancels_the_robots_drive(test_world_file: Path) -> None:
 def test_events_file_errors_name_the_item_and_what_is_allowed(tmp_path: Path) -> None:
     events = tmp_path / "events.yaml"
     events.write_text("- at: 3\n  close: hall_a\n- at: -1\n  open: hall_b\n")
-    with pytest.raises(EventError, match=r"events.yaml:3: at: must be a number of seconds >= 0"):
+    with pytest.raises(EventError, match=r"events.yaml:3: at: must be seconds >= 0 or a window"):
         load_events(events)
     events.write_text("- at: 3\n  shut: hall_a\n")
     with pytest.raises(EventError, match=r"events.yaml:1: unknown key 'shut'.*open: NAME"):
@@ -130,6 +130,40 @@ def test_events_file_errors_name_the_item_and_what_is_allowed(tmp_path: Path) ->
         None,
         str(FETCH / "events" / "close_hallway.yaml") + ":3",
     )
+
+
+def test_an_event_window_is_drawn_from_the_seed_the_same_for_its_items(
+    test_world_file: Path, tmp_path: Path
+) -> None:
+    events = tmp_path / "events.yaml"
+    events.write_text(
+        "- at: [5, 20]\n  close: hall_bedroom_kitchen\n"
+        "- at: [5, 20]\n  lock: hall_bedroom_kitchen\n- at: 2\n  open: hall_bedroom_kitchen\n"
+    )
+    loaded = load_events(events)
+    assert [e.window for e in loaded] == [None, (5.0, 20.0), (5.0, 20.0)]
+    times = {}
+    for seed in (1, 2, 3):
+        world = RobosimWorld(test_world_file, seed=seed, events=loaded)
+        again = RobosimWorld(test_world_file, seed=seed, events=loaded)
+        assert world.next_event_time() == again.next_event_time() == 2.0
+        for each in (world, again):
+            each.elapse(2.0)
+            each.apply_due_events()
+        times[seed] = world.next_event_time()
+        assert times[seed] == again.next_event_time()
+        assert times[seed] is not None and 5.0 <= times[seed] <= 20.0
+        world.elapse(20.0)
+        assert len(world.apply_due_events()) == 2  # closed and locked at that moment
+    assert len(set(times.values())) == 3  # other seeds, other moments
+    events.write_text("- at: [20, 5]\n  close: hall_bedroom_kitchen\n")
+    with pytest.raises(
+        EventError, match=r"events.yaml:1: at: \[20, 5\]: the window's start is after"
+    ):
+        load_events(events)
+    events.write_text("- at: [1, 2, 3]\n  close: hall_bedroom_kitchen\n")
+    with pytest.raises(EventError, match=r"or a window \[LO, HI\]"):
+        load_events(events)
 
 
 def test_events_with_unknown_names_are_refused(test_world_file: Path) -> None:
