@@ -286,6 +286,8 @@ def _connect_robot(
         seed=args.seed,
         fail_rate=fail_rate,
         time_scale=0.01 if args.time_scale is None else args.time_scale,
+        # A pyrobosim world's events happen in the robot's process, on its clock.
+        events=args.events,
         log=None if args.quiet else sys.stderr,
         echo_robot=args.verbose,  # the robot's goals and skill states: with -v only
     )
@@ -308,6 +310,11 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
         return fail("--no-robot and --ros-prefix need --ros")
     if args.ros and args.resume:
         return fail("--resume cannot be combined with --ros (the robot's world is not journaled)")
+    if args.ros and args.no_robot and args.events:
+        return fail(
+            "--events with --no-robot: the world's events happen in the robot's process; give "
+            "them to the robot node (python -m plan_bridge.ros.skill_server ... --events FILE)"
+        )
     if args.snapshot:
         from plan_bridge.robosim.picture import picture_problem
 

@@ -5,7 +5,8 @@ action of a PDDL domain as a ROS 2 action backed by a simulated world;
 :func:`ros_skills` builds a skill registry of ROS clients of it, so an
 :class:`~plan_bridge.execution.executive.Executive` runs its plan on the remote robot. The
 wire format is in :mod:`plan_bridge.ros.protocol`. For a domain folder the
-server runs the domain's own skill machines against its simulated world, and
+server runs the domain's own skill machines against its simulated world (for a
+pyrobosim world, the robosim skills against its ``RobosimWorld``), and
 :class:`plan_bridge.ros.connection.RobotConnection` starts or finds such a robot
 node for ``plan-bridge run --ros``.
 """

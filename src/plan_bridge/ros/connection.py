@@ -13,6 +13,7 @@ from __future__ import annotations
 import collections
 import itertools
 import os
+import shlex
 import signal
 import subprocess
 import sys
@@ -57,7 +58,10 @@ class RobotConnection:
 
     ``start_robot``: start ``python -m plan_bridge.ros.skill_server`` for
     ``target`` (a :class:`~plan_bridge.missions.mission.Target`) with ``seed``,
-    ``fail_rate`` and ``time_scale``, and stop it in :meth:`close`. Otherwise
+    ``fail_rate`` and ``time_scale``, and stop it in :meth:`close`. For a pyrobosim
+    world target the robot gets its goal (``--goal``, and ``--problem`` when it is a
+    goal of goals.yaml) and ``events`` (an events file: the world's changes happen in
+    the robot's process). Otherwise
     connect to the robot node already serving under ``prefix``. ``log`` receives
     what happens, and with ``echo_robot`` the robot's own lines, prefixed
     ``[robot]`` (the goals and the states of its skills).
@@ -77,6 +81,7 @@ class RobotConnection:
         seed: int = 0,
         fail_rate: float | None = None,
         time_scale: float = 0.01,
+        events: str | os.PathLike[str] | None = None,
         wait_timeout: float = 20.0,
         server_wait_timeout: float = 10.0,
         log: TextIO | None = None,
@@ -89,6 +94,7 @@ class RobotConnection:
         self.seed = seed
         self.fail_rate = fail_rate
         self.time_scale = time_scale
+        self.events = None if events is None else os.fspath(events)
         self.wait_timeout = wait_timeout
         self.server_wait_timeout = server_wait_timeout
         self.log = log
@@ -137,7 +143,7 @@ class RobotConnection:
                 ""
                 if self.start_robot
                 else " (start one with: python -m plan_bridge.ros.skill_server "
-                f"{self._target_path()} --problem {self.target.problem_path} "
+                f"{shlex.join(self._target_arguments())} "
                 f"--prefix {self.prefix}; same ROS_DOMAIN_ID on both sides)"
             )
             raise RobotError(f"no robot node answers under /{self.prefix}: {exc}{hint}") from None
@@ -155,25 +161,41 @@ class RobotConnection:
                 f"problem's initial state, which the plan assumes: restart it for a new mission"
             )
         how = f"started here, pid {info.get('pid')}" if self.start_robot else "already running"
+        goal = f" goal {info['goal']}" if info.get("goal") else ""
         self._say(
             f"ros: robot node {info.get('node')} ({how}) serves {info.get('target')} "
-            f"{info.get('problem')} under /{self.prefix}: {info.get('mode')}, seed "
+            f"{info.get('problem')}{goal} under /{self.prefix}: {info.get('mode')}, seed "
             f"{info.get('seed')}, fail rate {info.get('fail_rate')}"
             + (f", time scale {info['time_scale']}" if info.get("time_scale") is not None else "")
         )
 
     def _target_path(self) -> str:
         folder = getattr(self.target, "folder", None)
-        return str(folder if folder is not None else self.target.domain_path)
+        if folder is None:
+            # A pyrobosim world file (its target has no folder), or a bare domain.pddl.
+            folder = getattr(self.target, "world_file", None) or self.target.domain_path
+        return str(folder)
+
+    def _target_arguments(self) -> list[str]:
+        """The robot node's target arguments: the same problem (or world and goal)."""
+        arguments = [self._target_path()]
+        goal = getattr(self.target, "goal_text", None)
+        if goal is None:  # a PDDL target: its problem file
+            return [*arguments, "--problem", str(self.target.problem_path)]
+        name = getattr(self.target, "goal_name", "")
+        if name:  # a goal of goals.yaml: its name (shown by the robot) and its text
+            arguments += ["--problem", name]
+        arguments += ["--goal", goal]
+        if self.events is not None:
+            arguments += ["--events", self.events]
+        return arguments
 
     def _spawn(self) -> None:
         command = [
             sys.executable,
             "-m",
             "plan_bridge.ros.skill_server",
-            self._target_path(),
-            "--problem",
-            str(self.target.problem_path),
+            *self._target_arguments(),
             "--seed",
             str(self.seed),
             "--prefix",
@@ -372,9 +394,14 @@ class RobotWorld:
         """Nothing to undo here: the robot node ends its own actions."""
 
     def figures(self) -> dict[str, Any]:
+        """The robot's numbers from its ``info``: faults, simulated time, and its world's
+        own figures (a pyrobosim world's ``distance_m``, ``battery``, ``battery_used``,
+        ``world_changes``), as a run in one process reports them."""
         info = self.latest_info() or None
         robot = self.robot
+        own = info.get("figures") if info is not None else None
         return {
+            **(own if isinstance(own, dict) else {}),
             "faults_injected": None if info is None else info.get("faults_injected"),
             "sim_time_s": None if info is None else info.get("sim_time"),
             "ros": {

@@ -14,6 +14,12 @@ ends at once, the clock advances only by the time that really passed, and
 
 Threads that are not running a skill (a snapshot, the ``info`` service) are never
 slowed down.
+
+A pyrobosim world (:class:`~plan_bridge.robosim.world.RobosimWorld`) is not paced here:
+its actions already take wall time (pyrobosim's path executor, paced waits), so the
+robot node sets its own ``time_scale`` instead (drives at pyrobosim's real-time factor
+``1 / time_scale``, other actions wait ``time_scale`` times their duration, both
+stopped by a preempt).
 """
 
 from __future__ import annotations

@@ -19,7 +19,8 @@ package needs the ROS build toolchain. So one skill is three calls, all under
    unchanged);
 3. ``report`` (``test_msgs/srv/BasicTypes``): ``request.int64_value`` is the ticket;
    ``response.string_value`` is the JSON object ``{"outcome": "succeeded" | "aborted",
-   "observations": [["(at robot1 hall)", true], ...], "detail": "..."}``.
+   "observations": [["(at robot1 hall)", true], ["(battery-level robot1)", 42.5], ...],
+   "detail": "..."}`` (a numeric fluent is observed with a number).
 
 ``perform`` (``BasicTypes``) does all three in one service, for the service
 transport: ``request.string_value`` is the ground action, ``request.int64_value`` a
@@ -44,6 +45,7 @@ from __future__ import annotations
 import hashlib
 import importlib
 import json
+import math
 import re
 import threading
 from collections.abc import Iterable
@@ -111,8 +113,14 @@ def encode_result(
     )
 
 
-def decode_result(text: str) -> tuple[str, list[tuple[Fact, bool]], str]:
-    """(outcome, observations, detail) from a result payload; ValueError if malformed."""
+def decode_result(text: str) -> tuple[str, list[tuple[Fact, bool | float]], str]:
+    """(outcome, observations, detail) from a result payload; ValueError if malformed.
+
+    An observation is ``[fact, true/false]``, or ``[atom, number]`` for a numeric
+    fluent's reading (``["(battery-level robot)", 20.9]``): a finite JSON number with a
+    fraction or exponent, as :func:`encode_result` writes it (``1`` is refused: a
+    truth written as a number is a mistake, not a reading).
+    """
     if not isinstance(text, str) or len(text) > MAX_PAYLOAD:
         raise ValueError("the result payload is not a string of bounded size")
     data: Any = json.loads(text)
@@ -124,15 +132,20 @@ def decode_result(text: str) -> tuple[str, list[tuple[Fact, bool]], str]:
     raw = data.get("observations", [])
     if not isinstance(raw, list):
         raise ValueError("observations must be a list of [fact, true/false] pairs")
-    observations: list[tuple[Fact, bool]] = []
+    observations: list[tuple[Fact, bool | float]] = []
     for item in raw:
         if (
             not isinstance(item, list)
             or len(item) != 2
             or not isinstance(item[0], str)
-            or not isinstance(item[1], bool)
+            or not (
+                isinstance(item[1], bool) or (isinstance(item[1], float) and math.isfinite(item[1]))
+            )
         ):
-            raise ValueError(f"observation {item!r} is not a [fact, true/false] pair")
+            raise ValueError(
+                f"observation {item!r} is not a [fact, true/false] pair "
+                f"(nor [atom, number] for a numeric fluent)"
+            )
         observations.append((parse_fact(item[0]), item[1]))
     detail = data.get("detail", "")
     return outcome, observations, str(detail)[:1000]

@@ -15,6 +15,16 @@ in wall time (``--time-scale`` wall seconds per simulated second,
 :mod:`plan_bridge.ros.pacing`); a cancel preempts the skill machine and stops the
 motion in progress (which then has no effect).
 
+**A pyrobosim world** (a world folder such as ``domains/robosim_fetch``, or a
+``WORLD.yaml`` with ``--goal``; ``--events`` adds its changes at simulated times): the
+robot loads the world (:class:`~plan_bridge.robosim.world.RobosimWorld`, pyrobosim's
+seeded faults) and runs the robosim skill machines (:mod:`plan_bridge.robosim.skills`)
+against it. The world paces itself: ``--time-scale`` is its
+:attr:`~plan_bridge.robosim.world.RobosimWorld.time_scale` (drives run at pyrobosim's
+real-time factor ``1 / S``, other actions wait ``S`` times their duration); a cancel
+preempts the skill machine, which cancels pyrobosim's action (a drive stops where the
+robot is). ``info`` adds the world's figures (distance driven, battery, changes).
+
 **A bare domain.pddl, or a folder without Python:** every action is performed
 symbolically in a :class:`~plan_bridge.execution.simulation.SimulatedWorld` after
 ``--action-time`` seconds of wall time (feedback every tenth of it, cancellable
@@ -23,7 +33,8 @@ throughout), failing with probability ``--fail-rate`` (seeded).
 The wire format is in :mod:`plan_bridge.ros.protocol`. The process prints
 ``ready`` once serving and one line per goal event (``goal``, ``succeeded``,
 ``failed``, ``canceled``, followed by the action; ``state PATH`` for each state a
-domain skill enters), which tests and humans can follow. SIGINT or SIGTERM end it.
+domain skill enters; ``world CHANGE`` for each change of a pyrobosim world's events),
+which tests and humans can follow. SIGINT or SIGTERM end it.
 """
 
 from __future__ import annotations
@@ -37,13 +48,14 @@ import sys
 import threading
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import smach
 from plan_bridge.errors import FactError, PlanBridgeError
+from plan_bridge.execution.semantics import ActionModel
 from plan_bridge.execution.simulation import SimulatedWorld
-from plan_bridge.execution.world import normalise_observations
-from plan_bridge.pddl.task import PlanningTask, parse_fact
+from plan_bridge.execution.world import Observation, normalise_observations
+from plan_bridge.pddl.task import Fact, PlanningTask, parse_fact
 from plan_bridge.planning.planner import PlanStep
 from plan_bridge.ros.lease import select_short_lease
 from plan_bridge.ros.pacing import Pacer, Run, pace
@@ -74,7 +86,14 @@ from smach.ros._api import (
     rclpy,
 )
 
+if TYPE_CHECKING:
+    from plan_bridge.robosim.world import RobosimWorld
+
 __all__ = ["SkillServer", "main"]
+
+#: The predicates a pyrobosim world reads from pyrobosim itself (``RobosimWorld.truth``);
+#: the other facts of its ``facts`` service are the problem's (static) initial ones.
+ROBOSIM_PREDICATES = ("at", "holding", "handempty", "isopen", "islocked", "has", "searched")
 
 
 class SkillServer:
@@ -86,6 +105,10 @@ class SkillServer:
     ``pacer`` (see :func:`~plan_bridge.ros.pacing.pace`) lets a cancel stop the
     motion in progress. Goals run one at a time (one robot) unless ``concurrent``.
 
+    ``world`` is a :class:`SimulatedWorld` (its ``task`` is served), or a pyrobosim
+    :class:`~plan_bridge.robosim.world.RobosimWorld` with ``task`` (the generated
+    problem) and the robosim ``skills``; it paces itself (its ``time_scale``).
+
     The caller spins ``node`` (a multi-threaded executor: goals block their thread).
     ``log`` receives one line per goal event. ``meta`` is added to :meth:`info`.
     """
@@ -96,8 +119,9 @@ class SkillServer:
     def __init__(
         self,
         node: Any,
-        world: SimulatedWorld,
+        world: SimulatedWorld | RobosimWorld,
         *,
+        task: PlanningTask | None = None,
         prefix: str = "skills",
         action_time: float = 0.2,
         log: Callable[[str], None] | None = None,
@@ -110,7 +134,14 @@ class SkillServer:
         self._fibonacci = fibonacci
         self.node = node
         self.world = world
-        self.task: PlanningTask = world.task
+        if isinstance(world, SimulatedWorld):
+            self.task: PlanningTask = world.task if task is None else task
+            self._model = world.model
+        else:
+            if task is None or skills is None:
+                raise ValueError("a pyrobosim world is served with its task and its skills")
+            self.task = task
+            self._model = ActionModel(task)
         self.prefix = prefix.rstrip("/")
         self.action_time = action_time
         self.skills = skills
@@ -161,14 +192,16 @@ class SkillServer:
 
     @property
     def mode(self) -> str:
-        return "symbolic" if self.skills is None else "domain skills"
+        if self.skills is None:
+            return "symbolic"
+        return "domain skills" if isinstance(self.world, SimulatedWorld) else "pyrobosim skills"
 
     def info(self) -> dict[str, Any]:
         """What the ``info`` service answers: who this robot is and how its world is."""
         with self._lock:
             busy = sorted(str(step) for _, _, step in self._runs.values())
         world = self.world
-        faults = list(world.faults)
+        faults = list(world.faults) if isinstance(world, SimulatedWorld) else []
         return {
             **self.meta,
             "node": self.node.get_fully_qualified_name(),
@@ -181,10 +214,29 @@ class SkillServer:
             "busy": busy,
             "sim_time": round(world.now(), 3),
             "actions_run": world.actions_run,
-            "faults_injected": len(faults),
+            "faults_injected": int(world.faults_injected),
             "faults": [f"{f.kind}: {f.detail}" for f in faults[-50:]],
             "goal_reached": bool(world.goal_reached()),
+            # The world's own numbers (a pyrobosim world's distance, battery, changes):
+            # what ``plan-bridge run --json`` shows of a world in its own process.
+            "figures": world.figures(),
         }
+
+    def facts(self) -> list[str]:
+        """The facts true in the robot's world, as PDDL text (the ``facts`` service)."""
+        world = self.world
+        if isinstance(world, SimulatedWorld):
+            return sorted(" ".join(f) for f in world.facts)
+        return sorted(" ".join(f) for f in _robosim_facts(world, self.task))
+
+    def _changes(self) -> int:
+        """How many changes a pyrobosim world's events made so far (0 for others)."""
+        return 0 if isinstance(self.world, SimulatedWorld) else len(self.world.changes)
+
+    def _log_changes(self, since: int) -> None:
+        if not isinstance(self.world, SimulatedWorld):
+            for change in self.world.changes[since:]:
+                self._log(f"world {change}")
 
     # -- parsing ------------------------------------------------------------------------------
     def step_of(self, text: str) -> PlanStep:
@@ -286,14 +338,19 @@ class SkillServer:
         else:
             with self._the_robot():
                 time.sleep(self.action_time)
-                ok, observations = self.world.perform(step)
+                ok, observations = self._perform_symbolically(step)
             text = encode_result(ok, observations)
         self._log(f"{'succeeded' if ok else 'failed'} {step}")
         job.finish(ok, text)
 
+    def _perform_symbolically(self, step: PlanStep) -> tuple[bool, list[Observation]]:
+        world = self.world
+        assert isinstance(world, SimulatedWorld)  # a pyrobosim world always has its skills
+        return world.perform(step)
+
     def _on_facts(self, request: Any, response: Any) -> Any:
         response.success = True
-        response.message = json.dumps(sorted(" ".join(f) for f in self.world.facts))
+        response.message = json.dumps(self.facts())
         return response
 
     def _on_info(self, request: Any, response: Any) -> Any:
@@ -339,7 +396,7 @@ class SkillServer:
                     return result
                 handle.publish_feedback(self._fibonacci.Feedback(sequence=[tick * 10]))
                 time.sleep(self.action_time / 10)
-            ok, observations = self.world.perform(step)
+            ok, observations = self._perform_symbolically(step)
         with self._lock:
             self._reports[ticket] = encode_result(
                 ok, observations, "" if ok else "the action failed in the simulated world"
@@ -406,6 +463,7 @@ class SkillServer:
             if run.halted:
                 state.request_preempt()
             label = f"/{step.action}"
+            changes = self._changes()
 
             def on_event(event: Event) -> None:
                 if isinstance(event, StateEntered):
@@ -420,7 +478,7 @@ class SkillServer:
             ud = smach.UserData()
             ud.action = step.action
             ud.arguments = step.arguments
-            ud.params = self.world.model.ground(step).binding
+            ud.params = self._model.ground(step).binding
             detail = ""
             try:
                 with self.pacer.running(run) if self.pacer else contextlib.nullcontext(run):
@@ -431,6 +489,7 @@ class SkillServer:
             finally:
                 if container is not None:
                     container.remove_listener(on_event)
+                self._log_changes(changes)
         mapped = skill.map_outcome(str(outcome)) if skill is not None else str(outcome)
         if mapped == "preempted" or (run.halted and mapped != "succeeded"):
             return "preempted", encode_result(False, [], detail or "cancelled")
@@ -460,17 +519,62 @@ class SkillServer:
             self.node.destroy_service(service)
 
 
+def _robosim_facts(world: RobosimWorld, task: PlanningTask) -> set[Fact]:
+    """The facts true in a pyrobosim world now: the atoms of :data:`ROBOSIM_PREDICATES`
+    over the task's objects as pyrobosim has them, and the other initial facts."""
+    by_type: dict[str, list[str]] = {}
+    for name, kind in task.objects.items():
+        by_type.setdefault(kind, []).append(name)
+    bots, items = by_type.get("bot", []), by_type.get("item", [])
+    spawns = by_type.get("spawn", [])
+    spots = [*by_type.get("area", []), *spawns, *by_type.get("door", [])]
+    gates = [*by_type.get("hall", []), *by_type.get("fixture", [])]
+    candidates: list[Fact] = [
+        *(("at", r, s) for r in bots for s in spots),
+        *(("at", i, s) for i in items for s in spawns),
+        *(("holding", r, i) for r in bots for i in items),
+        *(("handempty", r) for r in bots),
+        *((p, g) for p in ("isopen", "islocked") for g in gates),
+        *(("has", g, i) for g in by_type.get("fixture", []) for i in items),
+        *(("searched", s) for s in spawns),
+    ]
+    facts = {f for f in task.initial_facts if f[0] not in ROBOSIM_PREDICATES}
+    facts.update(f for f in candidates if world.truth(f))
+    return facts
+
+
+def _is_world_target(target: Any) -> bool:
+    from plan_bridge.missions.world_target import WorldTarget
+
+    return isinstance(target, WorldTarget)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m plan_bridge.ros.skill_server",
         description="A simulated robot node: serve a domain's actions as ROS 2 actions. A "
         "domain folder runs its own skill state machines against its simulated world; a "
-        "domain.pddl runs every action symbolically.",
+        "pyrobosim world (WORLD.yaml, or a folder with world.yaml) runs the robosim skills "
+        "against it; a domain.pddl runs every action symbolically.",
     )
-    parser.add_argument("target", metavar="TARGET", help="a domain folder or a domain.pddl")
+    parser.add_argument(
+        "target",
+        metavar="TARGET",
+        help="a domain folder, a domain.pddl, or a pyrobosim world (WORLD.yaml or a folder)",
+    )
     parser.add_argument("problem_file", metavar="PROBLEM", nargs="?", help="problem file")
     parser.add_argument(
-        "--problem", help="problem file or name in the folder's problems/ (default: the first)"
+        "--problem",
+        help="problem file or name in the folder's problems/ (default: the first); for a "
+        "pyrobosim world folder, a goal of its goals.yaml",
+    )
+    parser.add_argument(
+        "--goal", help='pyrobosim world: the goal, e.g. "(At apple0 table0_tabletop)"'
+    )
+    parser.add_argument(
+        "--events",
+        metavar="EVENTS.yaml",
+        help="pyrobosim world: changes of the world at simulated times (docs/sim.md)",
     )
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument(
@@ -483,7 +587,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         "--time-scale",
         type=float,
         default=0.01,
-        help="wall seconds per simulated second of a domain's skills (default 0.01; 0: no pacing)",
+        help="wall seconds per simulated second of a domain's skills or a pyrobosim world "
+        "(default 0.01; 0: no pacing)",
     )
     parser.add_argument(
         "--action-time", type=float, default=0.2, help="seconds per symbolic action"
@@ -513,8 +618,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     from plan_bridge.missions.mission import load_target
 
     try:
-        target = load_target(args.target, args.problem or args.problem_file)
-        symbolic = target.module is None or not hasattr(target.module, "setup")
+        target = load_target(
+            args.target, args.problem or args.problem_file, goal=args.goal, events=args.events
+        )
+        robosim = _is_world_target(target)
+        symbolic = not target.has_own_skills
         fail_rate = args.fail_rate if args.fail_rate is not None else (0.0 if symbolic else 0.1)
         setup = target.setup(seed=args.seed, fail_rate=fail_rate)
         if not symbolic:
@@ -526,12 +634,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (PlanBridgeError, OSError) as exc:
         print(f"skill_server: {exc}", file=sys.stderr, flush=True)
         return 2
-    world = setup.world
-    if not isinstance(world, SimulatedWorld):
+    world: Any = setup.world
+    pacer = None
+    if robosim:
+        # A pyrobosim world paces itself: drives at pyrobosim's real-time factor 1/S,
+        # the other actions wait S times their duration (RobosimWorld.time_scale).
+        world.time_scale = args.time_scale
+    elif not isinstance(world, SimulatedWorld):
         world = SimulatedWorld(target.task, seed=args.seed, fail_rate=fail_rate)
         symbolic = True
-    pacer = None
-    if not symbolic:
+    if not symbolic and not robosim:
         pacer = Pacer(args.time_scale)
         pace(world, pacer)
 
@@ -546,6 +658,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     server = SkillServer(
         node,
         world,
+        task=target.task if robosim else None,
         prefix=args.prefix,
         action_time=args.action_time,
         log=say,
@@ -559,6 +672,15 @@ def main(argv: Sequence[str] | None = None) -> int:
             "fail_rate": fail_rate,
             "time_scale": args.time_scale if not symbolic else None,
             "action_time": args.action_time if symbolic else None,
+            **(
+                {
+                    "goal": getattr(target, "goal_text", ""),
+                    "goal_name": getattr(target, "goal_name", ""),
+                    "events": args.events,
+                }
+                if robosim
+                else {}
+            ),
         },
     )
     executor = MultiThreadedExecutor(num_threads=4)
@@ -575,11 +697,13 @@ def main(argv: Sequence[str] | None = None) -> int:
                 break
     except ExternalShutdownException:
         pass
-    say(f"faults {len(world.faults)}")
+    say(f"faults {world.faults_injected}")
     server.destroy()
     executor.shutdown(timeout_sec=1)
     node.destroy_node()
     rclpy.try_shutdown()
+    if robosim:
+        world.close()
     if profile is not None:
         with contextlib.suppress(OSError):
             profile.unlink()
