@@ -126,9 +126,13 @@ class Mission:
         The journal ends with a ``summary`` record, or with ``interrupted`` when Ctrl-C
         or SIGTERM stopped the run (then a resume continues it).
         """
+        from plan_bridge.execution.events import WorldScenes
         from smach import SmachError
 
         interrupted: KeyboardInterrupt | None = None
+        # Pictures of the world (``scene`` events) when it draws itself and a journal or a
+        # viewer watches; attached last, so they follow the step ends they picture.
+        scenes = WorldScenes.start(self.executive, self.world)
         try:
             self.outcome = self.executive.execute()
         except KeyboardInterrupt as exc:
@@ -138,6 +142,8 @@ class Mission:
             self.outcome, self.error = None, str(exc)
             self.executive.report.explanation = str(exc)
         finally:
+            if scenes is not None:
+                scenes.close()
             for close in reversed(self._closers):
                 close()
             self._closers.clear()

@@ -12,6 +12,10 @@ id="map">`` (one transform flips y): every room, hallway, location and spawn is 
 ``location``, ``spawn``) and ``data-name``; every object a ``<circle
 class="object">``; every robot's drives one ``<path class="trail" data-robot=...>``
 and its final pose a ``<g class="robot">``.
+
+The viewer shows the same drawing while a mission runs (:func:`scene_picture`, without
+the title line): the runner emits it as a ``scene`` event at the mission's start, at
+the end of every step and when the world's events change it (docs/introspection.md).
 """
 
 from __future__ import annotations
@@ -26,7 +30,15 @@ from xml.sax.saxutils import escape, quoteattr
 if TYPE_CHECKING:
     from plan_bridge.robosim.world import RobosimWorld
 
-__all__ = ["FORMATS", "picture_problem", "picture_title", "scene_of", "svg_text", "write_picture"]
+__all__ = [
+    "FORMATS",
+    "picture_problem",
+    "picture_title",
+    "scene_of",
+    "scene_picture",
+    "svg_text",
+    "write_picture",
+]
 
 #: The picture formats by suffix.
 FORMATS = (".svg", ".png")
@@ -201,14 +213,17 @@ def _pts(points: Sequence[Point]) -> str:
     return " ".join(f"{_num(x)},{_num(y)}" for x, y in points)
 
 
-def svg_text(scene: Scene, title: str) -> str:
-    """The SVG document of a scene (map in world coordinates, y up)."""
+def svg_text(scene: Scene, title: str, *, final: bool = True) -> str:
+    """The SVG document of a scene (map in world coordinates, y up). No ``title``: no
+    title line. ``final=False``: the robots' poses are not the run's last (a viewer's
+    picture of a moment, :func:`scene_picture`)."""
     x0, y0, x1, y1 = scene.bounds()
     x0, y0, x1, y1 = x0 - _MARGIN, y0 - _MARGIN, x1 + _MARGIN, y1 + _MARGIN
     width = (x1 - x0) * _SCALE
-    lines = _wrap(title, int(width / 9))
-    top = _TITLE_PX + 18 * (len(lines) - 1)
+    lines = _wrap(title, int(width / 9)) if title else []
+    top = _TITLE_PX + 18 * (len(lines) - 1) if lines else 8.0
     height = (y1 - y0) * _SCALE + top + 22
+    pose_word = "final pose" if final else "pose"
 
     def px(x: float, y: float) -> Point:
         return (x - x0) * _SCALE, top + (y1 - y) * _SCALE
@@ -266,7 +281,7 @@ def svg_text(scene: Scene, title: str) -> str:
         x, y, yaw = robot.pose
         hx, hy = x + robot.radius * 1.6 * math.cos(yaw), y + robot.radius * 1.6 * math.sin(yaw)
         out.append(
-            f'<g class="robot" data-name={quoteattr(robot.name)}><title>{escape(robot.name)}: final pose '
+            f'<g class="robot" data-name={quoteattr(robot.name)}><title>{escape(robot.name)}: {pose_word} '
             f"x={x:.2f} y={y:.2f} yaw={math.degrees(yaw):.0f} deg</title>"
             f'<circle cx="{_num(x)}" cy="{_num(y)}" r="{_num(robot.radius)}" fill="{robot.color}" '
             f'vector-effect="non-scaling-stroke"/><line x1="{_num(x)}" y1="{_num(y)}" x2="{_num(hx)}" '
@@ -294,7 +309,7 @@ def svg_text(scene: Scene, title: str) -> str:
         )
     out.append("</g>")
     out.append(
-        f'<text class="legend" x="10" y="{height - 8:.0f}">lines: paths driven; discs: final poses; '
+        f'<text class="legend" x="10" y="{height - 8:.0f}">lines: paths driven; discs: {pose_word}s; '
         "hatched: closed hallway; red outline: locked</text>"
     )
     out.append("</svg>")
@@ -393,6 +408,16 @@ def _png(scene: Scene, title: str, path: Path) -> None:
     ax.set_ylabel("y (m)")
     figure.tight_layout()
     figure.savefig(path, format="png")
+
+
+def scene_picture(world: RobosimWorld) -> tuple[str, str]:
+    """The viewer's picture of ``world`` as it is now (the SVG of a ``scene`` event,
+    :class:`~smach.introspection.events.SceneChanged`): the map, trails so far and the
+    robots' current poses, without a title line; and its caption (simulated time,
+    distance driven)."""
+    svg = svg_text(scene_of(world), "", final=False)
+    caption = f"{world.now():.1f} s simulated · {world.distance_m:.1f} m driven"
+    return svg, caption
 
 
 def write_picture(world: RobosimWorld, path: str | Path, title: str) -> Path:

@@ -189,13 +189,16 @@ class RobosimWorld:
 
     def apply_due_events(self) -> list[str]:
         """Apply the events whose time has come; what each did. An event the world
-        refuses now (a robot in the hallway being closed) waits for the next check."""
+        refuses now (a robot in the hallway being closed) waits for the next check, and
+        so do the later events on the same hallway or location (a lock waits for the
+        close before it)."""
         done: list[str] = []
         with self._lock:
             now = self.now()
             kept: list[WorldEvent] = []
+            waiting: set[str] = set()  # targets with an earlier event still waiting
             for event in self._pending:
-                if event.at > now + 1e-9:
+                if event.at > now + 1e-9 or event.target in waiting:
                     kept.append(event)
                     continue
                 ok, text = self._apply_event(event)
@@ -203,8 +206,11 @@ class RobosimWorld:
                     done.append(f"{now:.2f} s: {text}")
                 else:
                     kept.append(event)
+                    waiting.add(event.target)
             self._pending = kept
             self.changes.extend(done)
+        if done and self.on_scene is not None:  # the viewer's picture (see on_scene)
+            self.on_scene("; ".join(done))
         return done
 
     def _apply_event(self, event: WorldEvent) -> tuple[bool, str]:
@@ -215,6 +221,11 @@ class RobosimWorld:
                 return True, f"{event.target} is held by a robot: not moved ({event.origin})"
             ok = bool(world.update_object(obj, loc=event.to))
             return ok, f"{event.target} moved to {obj.parent.name}"
+        if event.kind in ("close", "lock") and any(
+            robot.location is not None and robot.location.name == event.target
+            for robot in world.robots
+        ):
+            return False, ""  # a robot in the doorway: try again later (quietly)
         call = {
             "open": world.open_location,
             "close": world.close_location,
@@ -486,6 +497,19 @@ class RobosimWorld:
                 trail[-1].extend(xy[1:])
             else:
                 trail.append(xy)
+
+    # -- the viewer's picture (a "scene" event; plan_bridge.execution.events.WorldScenes) --
+    on_scene: Callable[[str], object] | None = None
+    """Set by whoever shows the world (the mission runner, for a journal or a viewer):
+    called, with what changed, when the world's events changed it."""
+
+    def scene(self) -> tuple[str, str]:
+        """The picture of the world now, for viewers: (SVG text, caption)."""
+        from plan_bridge.robosim.picture import scene_picture
+
+        return scene_picture(self)
+
+    # -- end of the viewer's picture ------------------------------------------------------
 
     def close(self) -> None:
         """Stop pyrobosim's threads (sensors, path validation)."""

@@ -27,10 +27,11 @@ from collections.abc import Callable
 from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING, Any, ClassVar
 
-from smach.introspection.summary import frozen
+from smach.introspection.summary import Summary, frozen
 
 if TYPE_CHECKING:
     from smach.control import Controller
+    from smach.state import State
 
 __all__ = [
     "Capture",
@@ -43,12 +44,15 @@ __all__ = [
     "Listener",
     "PreemptRequested",
     "PreemptServiced",
+    "SceneChanged",
     "StateEntered",
     "StateExited",
     "Transition",
     "UserdataWritten",
+    "captured",
     "event_of",
     "field_names",
+    "publish",
     "stamp",
 ]
 
@@ -182,6 +186,41 @@ class ErrorRaised(Event):
     kind: ClassVar[str] = "error"
     error_type: str
     message: str
+
+
+@dataclass(slots=True, kw_only=True)
+class SceneChanged(Event):
+    """A picture of the world the tree acts on, as it is now (a ``scene`` record).
+
+    Emitted (with :func:`publish`) by whoever owns a world, when what it shows changed;
+    ``path`` is the container that owns the world. ``svg`` is a standalone SVG document,
+    ``title`` a caption. Viewers show the newest scene beside the machine (replay: the
+    newest as of the moment shown). Records keep ``svg`` whole, not cut like other
+    strings: it is the capture's :class:`~smach.introspection.summary.Summary`, which
+    journals and viewers write as it is.
+    """
+
+    kind: ClassVar[str] = "scene"
+    svg: str
+    title: str = ""
+
+    def capture(self) -> Capture:
+        return (type(self), self.path, self.time, self.thread, Summary(self.svg), self.title)
+
+
+def captured(state: State) -> bool:
+    """Whether a capture listener (a journal, a viewer) watches the tree ``state`` belongs
+    to: an emitter whose events cost something to make (a picture) may skip them otherwise."""
+    return bool(state._bus.sinks)
+
+
+def publish(state: State, event: Event) -> None:
+    """Send ``event`` to every listener of the tree ``state`` belongs to (nothing when
+    nobody listens): for events from outside the tree's own states, such as the
+    :class:`SceneChanged` pictures of the world a mission runs in."""
+    bus = state._bus
+    if bus.listeners:
+        bus.emit(event)
 
 
 Listener = Callable[[Event], object]

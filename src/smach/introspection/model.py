@@ -13,7 +13,9 @@ Besides the event kinds of :mod:`smach.introspection.events` and of ``plan_bridg
 (recognised by their ``kind`` only: smach does not import plan_bridge), a few
 record kinds exist for viewers: ``structure`` (the tree changed), ``userdata``
 (a snapshot of a container's userdata) and ``resync`` (the active states read from
-the live tree after the viewer dropped events).
+the live tree after the viewer dropped events). A ``scene`` record
+(:class:`~smach.introspection.events.SceneChanged`: a picture of the world, SVG text)
+is kept as the view's :attr:`ViewModel.scene` until the next one.
 """
 
 from __future__ import annotations
@@ -69,6 +71,9 @@ class ViewModel:
     running_step: str = ""
     timeline: Timeline = field(default_factory=Timeline)
     """Planned and actual intervals of the actions of temporal plans (the Gantt view)."""
+    scene: dict[str, Any] | None = None
+    """The newest picture of the world (a ``scene`` record): ``n`` (the record's number,
+    counted from 1), ``time``, ``title``, ``path`` and ``svg`` (the SVG text)."""
 
     # -- folding ---------------------------------------------------------------------------
     def apply(self, record: Mapping[str, Any]) -> None:
@@ -243,6 +248,17 @@ class ViewModel:
         if self.steps and self.steps[-1]["path"] == path:
             self.steps[-1] = {**self.steps[-1], "observed": changed}
 
+    def _scene(self, path: str, record: Mapping[str, Any]) -> None:
+        svg = record.get("svg")
+        if isinstance(svg, str) and svg:  # the text is shared with the record, not copied
+            self.scene = {
+                "n": self.index,
+                "time": record.get("time"),
+                "title": str(record.get("title", "") or ""),
+                "path": path,
+                "svg": svg,
+            }
+
     # -- helpers ------------------------------------------------------------------------------
     def _deactivate(self, path: str) -> None:
         if path in self.active:
@@ -289,6 +305,7 @@ class ViewModel:
             steps=list(self.steps),
             running_step=self.running_step,
             timeline=self.timeline.copy(),
+            scene=self.scene,
         )
 
     def to_json(self) -> dict[str, Any]:
@@ -315,7 +332,15 @@ class ViewModel:
             "steps": self.steps,
             "running_step": self.running_step,
             "gantt": self._gantt_summary(),
+            "scene": self.scene_summary(),
         }
+
+    def scene_summary(self) -> dict[str, Any] | None:
+        """The newest scene without its SVG (a page fetches the SVG when ``n`` changes)."""
+        scene = self.scene
+        if scene is None:
+            return None
+        return {**{k: v for k, v in scene.items() if k != "svg"}, "bytes": len(scene["svg"])}
 
     def _gantt_summary(self) -> dict[str, int] | None:
         actions = self.timeline.actions
@@ -347,6 +372,7 @@ _HANDLERS = {
     "observations_applied": ViewModel._observations,
     "action_started": ViewModel._action_started,
     "action_ended": ViewModel._action_ended,
+    "scene": ViewModel._scene,
 }
 
 

@@ -47,6 +47,8 @@ STATIC = {
     "control.js": "text/javascript; charset=utf-8",
     "gantt.js": "text/javascript; charset=utf-8",
     "gantt.css": "text/css; charset=utf-8",
+    "scene.js": "text/javascript; charset=utf-8",
+    "scene.css": "text/css; charset=utf-8",
 }
 MAX_RECORDS_PER_MESSAGE = 300
 MAX_RECORDS_PER_REQUEST = 2000
@@ -162,7 +164,20 @@ class ViewerServer:
         data["total"] = self.history.total
         data["first"] = self.history.first
         data["live"] = bool(self.source.live)
+        # The scene panel is there for the whole run once it has a picture of its world.
+        data["has_scenes"] = self.history.model.scene is not None
         return json.dumps(data, default=str, ensure_ascii=False)
+
+    def scene_svg(self, n: int) -> str | None:
+        """The SVG of the scene record number ``n`` (counted from 1; the ``n`` of a view's
+        ``scene``), or of the newest scene before it; None if there is none."""
+        with self._cond:
+            history = self.history
+            found = history.slice(n - 1, n)
+            if found and found[0].get("kind") == "scene" and isinstance(found[0].get("svg"), str):
+                return str(found[0]["svg"])
+            scene = history.view_at(n).scene
+        return None if scene is None else str(scene["svg"])
 
     def structure(self, version: int | None = None) -> StateNode | None:
         with self._cond:
@@ -176,7 +191,10 @@ class ViewerServer:
         with self._cond:
             end = min(end, start + MAX_RECORDS_PER_REQUEST)
             first = max(start, self.history.first)
-            return [{"n": first + i, **r} for i, r in enumerate(self.history.slice(first, end))]
+            return [
+                {"n": first + i, **(_without_svg(r) if r.get("kind") == "scene" else r)}
+                for i, r in enumerate(self.history.slice(first, end))
+            ]
 
     def wait_change(self, version: int, timeout: float) -> int:
         with self._cond:
@@ -218,6 +236,13 @@ class ViewerServer:
             self.close()
 
 
+_POLICY = (
+    "default-src 'self'; style-src 'self' 'unsafe-inline'; img-src 'self' data:; "
+    "connect-src 'self'; frame-ancestors 'none'"
+)
+_SCENE_POLICY = "default-src 'none'; style-src 'unsafe-inline'; img-src data:; sandbox"
+
+
 def _handler_class(viewer: ViewerServer) -> type[BaseHTTPRequestHandler]:
     class Handler(_Handler):
         server_viewer = viewer
@@ -240,18 +265,21 @@ class _Handler(BaseHTTPRequestHandler):
         name = host.rsplit(":", 1)[0] if not host.endswith("]") else host
         return name in LOOPBACK
 
-    def _send(self, body: bytes, content_type: str, status: HTTPStatus = HTTPStatus.OK) -> None:
+    def _send(
+        self,
+        body: bytes,
+        content_type: str,
+        status: HTTPStatus = HTTPStatus.OK,
+        *,
+        policy: str = _POLICY,
+    ) -> None:
         self.send_response(status)
         self.send_header("Content-Type", content_type)
         self.send_header("Content-Length", str(len(body)))
         self.send_header("Cache-Control", "no-store")
         self.send_header("X-Content-Type-Options", "nosniff")
         self.send_header("Referrer-Policy", "no-referrer")
-        self.send_header(
-            "Content-Security-Policy",
-            "default-src 'self'; style-src 'self' 'unsafe-inline'; img-src 'self' data:; "
-            "connect-src 'self'; frame-ancestors 'none'",
-        )
+        self.send_header("Content-Security-Policy", policy)
         self.end_headers()
         if self.command != "HEAD":
             self.wfile.write(body)
@@ -279,6 +307,7 @@ class _Handler(BaseHTTPRequestHandler):
             "/api/view": self._view,
             "/api/gantt": self._gantt,
             "/api/svg": self._svg,
+            "/api/scene": self._scene,
             "/api/records": self._records,
             "/api/export": self._export,
             "/api/stream": self._stream,
@@ -360,6 +389,15 @@ class _Handler(BaseHTTPRequestHandler):
         text = render_svg(root, collapsed=collapsed, standalone=False)
         self._send(text.encode("utf-8"), "image/svg+xml")
 
+    def _scene(self, query: dict[str, str], raw: str) -> None:
+        n = _int(query.get("n"))
+        text = self.server_viewer.scene_svg(self.server_viewer.history.total if n is None else n)
+        if text is None:
+            self._error(HTTPStatus.NOT_FOUND, "no scene (picture of the world) at that moment")
+            return
+        # The picture comes from a journal: as a document of its own it runs nothing.
+        self._send(text.encode("utf-8"), "image/svg+xml; charset=utf-8", policy=_SCENE_POLICY)
+
     def _records(self, query: dict[str, str], raw: str) -> None:
         viewer = self.server_viewer
         end = _int(query.get("end"))
@@ -419,6 +457,14 @@ class _Handler(BaseHTTPRequestHandler):
             pass
         finally:
             viewer.clients -= 1
+
+
+def _without_svg(record: dict[str, Any]) -> dict[str, Any]:
+    """A scene record for the timeline: its SVG (``/api/scene``) replaced by its size."""
+    svg = record.get("svg")
+    light = {k: v for k, v in record.items() if k != "svg"}
+    light["svg_bytes"] = len(svg) if isinstance(svg, str) else 0
+    return light
 
 
 def _int(text: str | None) -> int | None:

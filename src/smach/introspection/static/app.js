@@ -470,6 +470,7 @@ function describe(r) {
     case "action_started": return `step ${r.index} ${r.action} started (planned at ${r.planned_start} for ${r.planned_duration} plan s)`;
     case "action_ended": return `step ${r.index} ${r.action} ended: ${r.outcome}`;
     case "observations_applied": return `observed ${(r.changed || []).join(", ")}`;
+    case "scene": return `picture of the world${r.title ? ": " + r.title : ""}`;
     case "control": return `${r.action} (from ${r.source})${r.details && r.details.reason ? ": " + r.details.reason : ""} → ${r.state}`;
     default: return short(r, 200);
   }
