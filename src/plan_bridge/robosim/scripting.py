@@ -39,6 +39,7 @@ __all__ = [
     "CheckBattery",
     "Drive",
     "SkillState",
+    "TurnTakingConcurrence",
     "charger_spot",
     "go_to",
     "route",
@@ -201,7 +202,7 @@ class Drive(SkillState):
                     ud.blocked = sorted({*ud.blocked, *shut})
                     return "blocked"
             else:
-                return self._block(ud, hall) if hall is not None else "failed"
+                return "failed"
         return "arrived"
 
     def _door_passable(self, hall: str, door: str) -> bool:
@@ -284,3 +285,49 @@ def go_to(
                 "CHARGE", Act(world, robot, "charge", charger, location), {"done": "CHECK_BATTERY"}
             )
     return sm
+
+
+class TurnTakingConcurrence(smach.Concurrence):
+    """A Concurrence whose children (one machine per robot, say) take turns on the
+    world's simulated clock, as the steps of a planned mission do
+    (:mod:`plan_bridge.execution.clock`): they run at once, but one at a time, the one
+    whose simulated time is earliest next (ties: the one added first). The world's time
+    is then the latest child's timeline, not the sum of theirs, what one robot changes
+    reaches the other in one order, and a seeded run repeats exactly.
+
+    Every child's place in the order is taken before any of them starts. Run by a
+    thread that takes turns on the clock already, the children run as in a plain
+    Concurrence. The other arguments are :class:`smach.Concurrence`'s.
+    """
+
+    def __init__(
+        self,
+        world: RobosimWorld,
+        outcomes: Iterable[str],
+        default_outcome: str | None = None,
+        **options: Any,
+    ) -> None:
+        super().__init__(outcomes, default_outcome, **options)
+        self.world = world
+        self._tickets: dict[str, Any] = {}
+
+    def _run(self) -> str | None:
+        clock = self.world.clock
+        if clock.taking_part():
+            return super()._run()
+        labels = list(self.get_children())
+        self._tickets = {label: clock.admit(key) for key, label in enumerate(labels)}
+        try:
+            return super()._run()
+        finally:
+            tickets, self._tickets = self._tickets, {}
+            for ticket in tickets.values():
+                clock.discard(ticket)
+
+    def _run_child(self, run: Any, child: Any) -> None:
+        ticket = self._tickets.get(child.label)
+        if ticket is None:
+            super()._run_child(run, child)
+            return
+        with self.world.clock.turn(ticket):
+            super()._run_child(run, child)
