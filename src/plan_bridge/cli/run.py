@@ -390,7 +390,7 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
     if not args.quiet:
         verb = "resuming" if args.resume else "run"
         print(
-            f"plan-bridge {verb}: {target.name}, problem {target.problem_path.name} "
+            f"plan-bridge {verb}: {target.name}, {target.problem_label} "
             f"({skills_text}, seed {args.seed}, "
             f"fail rate {mission.fail_rate:g}, planner {mission.planner.name})",
             file=out,

@@ -90,6 +90,11 @@ class Target:
     module: ModuleType | None = None
 
     @property
+    def problem_label(self) -> str:
+        """What a run's header says it plans: ``problem p01.pddl``."""
+        return f"problem {self.problem_path.name}"
+
+    @property
     def problems(self) -> list[Path]:
         """Every problem of the folder (or just the given one)."""
         if self.folder is None:

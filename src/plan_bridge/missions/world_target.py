@@ -50,6 +50,11 @@ class WorldTarget(Target):
         return [Path(name) for name in self.goal_names] or [self.world_file]
 
     @property
+    def problem_label(self) -> str:
+        """``goal fetch_soda`` (a goal of goals.yaml) or ``goal (At apple0 table0)``."""
+        return f"goal {self.goal_name or self.goal_text}"
+
+    @property
     def skill_map_path(self) -> Path | None:
         return None
 

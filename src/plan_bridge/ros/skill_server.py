@@ -39,11 +39,9 @@ which tests and humans can follow. SIGINT or SIGTERM end it.
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import json
 import os
-import signal
 import sys
 import threading
 import time
@@ -51,14 +49,13 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 import smach
-from plan_bridge.errors import FactError, PlanBridgeError
+from plan_bridge.errors import FactError
 from plan_bridge.execution.semantics import ActionModel
 from plan_bridge.execution.simulation import SimulatedWorld
 from plan_bridge.execution.world import Observation, normalise_observations
 from plan_bridge.pddl.task import Fact, PlanningTask, parse_fact
 from plan_bridge.planning.planner import PlanStep
-from plan_bridge.ros.lease import select_short_lease
-from plan_bridge.ros.pacing import Pacer, Run, pace
+from plan_bridge.ros.pacing import Pacer, Run
 from plan_bridge.ros.protocol import (
     FACTS_SERVICE,
     INFO_SERVICE,
@@ -79,11 +76,8 @@ from smach.introspection.events import Event, StateEntered
 from smach.ros._api import (
     ActionServer,
     CancelResponse,
-    ExternalShutdownException,
     GoalResponse,
-    MultiThreadedExecutor,
     ReentrantCallbackGroup,
-    rclpy,
 )
 
 if TYPE_CHECKING:
@@ -543,171 +537,11 @@ def _robosim_facts(world: RobosimWorld, task: PlanningTask) -> set[Fact]:
     return facts
 
 
-def _is_world_target(target: Any) -> bool:
-    from plan_bridge.missions.world_target import WorldTarget
-
-    return isinstance(target, WorldTarget)
-
-
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="python -m plan_bridge.ros.skill_server",
-        description="A simulated robot node: serve a domain's actions as ROS 2 actions. A "
-        "domain folder runs its own skill state machines against its simulated world; a "
-        "pyrobosim world (WORLD.yaml, or a folder with world.yaml) runs the robosim skills "
-        "against it; a domain.pddl runs every action symbolically.",
-    )
-    parser.add_argument(
-        "target",
-        metavar="TARGET",
-        help="a domain folder, a domain.pddl, or a pyrobosim world (WORLD.yaml or a folder)",
-    )
-    parser.add_argument("problem_file", metavar="PROBLEM", nargs="?", help="problem file")
-    parser.add_argument(
-        "--problem",
-        help="problem file or name in the folder's problems/ (default: the first); for a "
-        "pyrobosim world folder, a goal of its goals.yaml",
-    )
-    parser.add_argument(
-        "--goal", help='pyrobosim world: the goal, e.g. "(At apple0 table0_tabletop)"'
-    )
-    parser.add_argument(
-        "--events",
-        metavar="EVENTS.yaml",
-        help="pyrobosim world: changes of the world at simulated times (docs/sim.md)",
-    )
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument(
-        "--fail-rate",
-        type=float,
-        default=None,
-        help="fault probability (default: 0.1 for a domain's own skills, 0 for symbolic ones)",
-    )
-    parser.add_argument(
-        "--time-scale",
-        type=float,
-        default=0.01,
-        help="wall seconds per simulated second of a domain's skills or a pyrobosim world "
-        "(default 0.01; 0: no pacing)",
-    )
-    parser.add_argument(
-        "--action-time", type=float, default=0.2, help="seconds per symbolic action"
-    )
-    parser.add_argument("--prefix", default="skills", help="action names: PREFIX/ACTION")
-    parser.add_argument("--node-name", default="skill_server")
-    parser.add_argument(
-        "--lease",
-        type=float,
-        default=2.0,
-        help="DDS lease in seconds, so that executives notice a crashed robot in about that "
-        "time (default 2; 0 keeps Fast DDS's 20 s; ignored if FASTDDS_DEFAULT_PROFILES_FILE is set)",
-    )
-    parser.add_argument(
-        "--exit-with-parent",
-        action="store_true",
-        help="exit when the process that started this one exits (used by plan-bridge run --ros)",
-    )
-    args = parser.parse_args(argv)
-    if args.problem and args.problem_file:
-        parser.error("give the problem either as PROBLEM or as --problem, not both")
-    if args.fail_rate is not None and not 0.0 <= args.fail_rate <= 1.0:
-        parser.error(f"--fail-rate must be between 0 and 1, got {args.fail_rate}")
-    if args.time_scale < 0:
-        parser.error(f"--time-scale must be >= 0, got {args.time_scale}")
+    """The robot node's command line (:mod:`plan_bridge.ros.robot_node`)."""
+    from plan_bridge.ros.robot_node import main as run_node
 
-    from plan_bridge.missions.mission import load_target
-
-    try:
-        target = load_target(
-            args.target, args.problem or args.problem_file, goal=args.goal, events=args.events
-        )
-        robosim = _is_world_target(target)
-        symbolic = not target.has_own_skills
-        fail_rate = args.fail_rate if args.fail_rate is not None else (0.0 if symbolic else 0.1)
-        setup = target.setup(seed=args.seed, fail_rate=fail_rate)
-        if not symbolic:
-            problems = setup.skills.check(target.task)
-            if problems:
-                raise PlanBridgeError(
-                    "the skills do not fit the domain:\n  " + "\n  ".join(problems)
-                )
-    except (PlanBridgeError, OSError) as exc:
-        print(f"skill_server: {exc}", file=sys.stderr, flush=True)
-        return 2
-    world: Any = setup.world
-    pacer = None
-    if robosim:
-        # A pyrobosim world paces itself: drives at pyrobosim's real-time factor 1/S,
-        # the other actions wait S times their duration (RobosimWorld.time_scale).
-        world.time_scale = args.time_scale
-    elif not isinstance(world, SimulatedWorld):
-        world = SimulatedWorld(target.task, seed=args.seed, fail_rate=fail_rate)
-        symbolic = True
-    if not symbolic and not robosim:
-        pacer = Pacer(args.time_scale)
-        pace(world, pacer)
-
-    profile = select_short_lease(args.lease)
-    parent = os.getppid()
-    rclpy.init()
-    node = rclpy.create_node(args.node_name)
-
-    def say(line: str) -> None:
-        print(line, flush=True)
-
-    server = SkillServer(
-        node,
-        world,
-        task=target.task if robosim else None,
-        prefix=args.prefix,
-        action_time=args.action_time,
-        log=say,
-        skills=None if symbolic else setup.skills,
-        pacer=pacer,
-        concurrent=bool(setup.concurrent) and not symbolic,
-        meta={
-            "target": target.name,
-            "problem": target.problem_path.name,
-            "seed": args.seed,
-            "fail_rate": fail_rate,
-            "time_scale": args.time_scale if not symbolic else None,
-            "action_time": args.action_time if symbolic else None,
-            **(
-                {
-                    "goal": getattr(target, "goal_text", ""),
-                    "goal_name": getattr(target, "goal_name", ""),
-                    "events": args.events,
-                }
-                if robosim
-                else {}
-            ),
-        },
-    )
-    executor = MultiThreadedExecutor(num_threads=4)
-    executor.add_node(node)
-    stop = threading.Event()
-    signal.signal(signal.SIGTERM, lambda *_: stop.set())
-    signal.signal(signal.SIGINT, lambda *_: stop.set())
-    say("ready")
-    try:
-        while not stop.is_set() and rclpy.ok():
-            executor.spin_once(timeout_sec=0.1)
-            if args.exit_with_parent and os.getppid() != parent:
-                say("parent exited")
-                break
-    except ExternalShutdownException:
-        pass
-    say(f"faults {world.faults_injected}")
-    server.destroy()
-    executor.shutdown(timeout_sec=1)
-    node.destroy_node()
-    rclpy.try_shutdown()
-    if robosim:
-        world.close()
-    if profile is not None:
-        with contextlib.suppress(OSError):
-            profile.unlink()
-    return 0
+    return run_node(argv)
 
 
 if __name__ == "__main__":
