@@ -17,7 +17,9 @@ timeline. A step whose predecessors have happened starts only when its at-start
 conditions hold in the belief; while other steps run it waits for them (the belief
 may still change), and when nothing runs it starts anyway and reports ``invalid``.
 So a late action delays its dependents instead of breaking them, and independent
-actions are not held up by it.
+actions planned with it go ahead; those planned after it wait with it (the plan is
+broken there: the replan comes when the steps running end, instead of after another
+robot's steps were played to the plan's end).
 
 **Whose clock.** The dispatcher follows a :class:`~plan_bridge.execution.clock.Clock`:
 the wall clock by default (a robot), or a simulated world's clock. On a simulated clock
@@ -574,6 +576,10 @@ class _Dispatch:
     """Held steps let go because nothing else could happen: every running step was
     held and no step could start (a step the plan needs first cannot start), so the
     plan's order cannot be kept; their ends go ahead and the failure shows."""
+    blocked: set[int] = field(default_factory=set)
+    """Steps due whose at-start conditions do not hold in the belief: while any is,
+    no step planned after it starts (the plan is broken there; the replan comes
+    sooner)."""
 
 
 class TemporalDispatch(smach.Container):
@@ -822,6 +828,7 @@ class TemporalDispatch(smach.Container):
         now = self.clock.now()
         due: float | None = None
         facts = self.belief.facts
+        ready: list[int] = []
         for j in list(run.waiting):
             at = self._ready_at(run, j)
             if at is None:
@@ -831,12 +838,21 @@ class TemporalDispatch(smach.Container):
                 continue
             state = self._states[self.labels[j]]
             if state.check_preconditions and not state.ground.applicable(facts):
-                continue  # wait for the belief to change (or for _force_start)
-            self._launch(run, j)
-        return due
+                run.blocked.add(j)  # wait for the belief to change (or for _force_start)
+                continue
+            run.blocked.discard(j)
+            ready.append(j)
+        # A step that cannot start holds back the steps planned after it: when the
+        # running steps end and it still cannot, the replan comes at once (another
+        # robot's later steps are not played to the plan's end meanwhile).
+        hold = min((self.planned_start[b] for b in run.blocked), default=None)
+        for j in ready:
+            if hold is None or self.planned_start[j] <= hold + 1e-9:
+                self._launch(run, j)
+        return due if hold is None else None
 
     def _force_start(self, run: _Dispatch) -> bool:
-        for j in run.waiting:
+        for j in sorted(run.waiting, key=lambda j: j not in run.blocked):
             at = self._ready_at(run, j)
             if at is not None:
                 self._launch(run, j)

@@ -157,6 +157,23 @@ def test_the_finish_policy_lets_the_other_running_steps_complete(task: PlanningT
     assert ("light-on", "yard") not in belief  # its at-end effect was applied
 
 
+def test_a_step_that_cannot_start_holds_back_the_steps_planned_after_it(
+    task: PlanningTask,
+) -> None:
+    # inspect cannot start (docked). hold-light, planned with it, goes ahead; the second
+    # hold-light, planned after it, waits with it: the dispatch ends (and a replan can
+    # come) when the first hold-light ends, not after the rest of the plan was played.
+    steps = [
+        PlanStep("inspect", ("scout", "yard"), 0.0, 2.0),
+        PlanStep("hold-light", ("lamp", "yard"), 0.0, 4.0),
+        PlanStep("hold-light", ("lamp", "yard"), 4.5, 4.0),
+    ]
+    outcome, dispatch, _, _ = run(task, skills_with(hold_light=0.05), steps)
+    assert outcome == "invalid"
+    rows = [(row["planned_start"], row["outcome"]) for row in dispatch.timeline()]
+    assert sorted(rows, key=lambda r: r[0]) == [(0.0, "invalid"), (0.0, "succeeded"), (4.5, "")]
+
+
 def test_a_held_end_is_let_go_when_the_step_it_waits_for_can_never_start(
     task: PlanningTask,
 ) -> None:
