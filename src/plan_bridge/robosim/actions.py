@@ -33,7 +33,7 @@ def plan_drive(world: RobosimWorld, robot: Any, target: str) -> tuple[Any, Actio
     else:
         goal = world.sim.get_entity_by_name(spot.name)
     began = time.perf_counter()
-    path = robot.plan_path(goal=goal)
+    path = _without_repeats(robot.plan_path(goal=goal))
     world.robot_wall_s += time.perf_counter() - began
     if path is None or path.num_poses < 2:
         if (path is not None and path.num_poses == 1) or world.spot_of(robot) == spot.name:
@@ -42,6 +42,28 @@ def plan_drive(world: RobosimWorld, robot: Any, target: str) -> tuple[Any, Actio
             "PLANNING_FAILURE", f"no path from {world.spot_of(robot)} to {spot.name}"
         )
     return path, ActionResult("SUCCESS")
+
+
+def _without_repeats(path: Any) -> Any:
+    """``path`` without waypoints at the position of the one before (the last one's yaw
+    kept). pyrobosim's bidirectional RRT sometimes puts the node where its two trees met
+    twice, the second time with a yaw of 0 (``fill_yaws`` of a zero-length leg): the
+    robot would turn there and back (time that differs from run to run, as whether it
+    happens depends on the order of a set of nodes), and pyrobosim would warn about
+    trajectory points at the same time."""
+    from pyrobosim.utils.path import Path
+
+    if path is None or path.num_poses < 2:
+        return path
+    kept = [path.poses[0]]
+    for index, pose in enumerate(path.poses[1:], start=1):
+        if _dist(kept[-1], pose) > 1e-9:
+            kept.append(pose)
+        elif index == path.num_poses - 1 and len(kept) > 1:
+            kept[-1] = pose
+    if len(kept) == path.num_poses:
+        return path
+    return Path(poses=kept, planning_time=path.planning_time)
 
 
 def cross_path(

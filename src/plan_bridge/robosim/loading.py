@@ -25,6 +25,8 @@ MISSING = (
     "(pip install -e '.[sim]', or ./dev which installs it)"
 )
 _STDOUT_LOCK = threading.Lock()
+#: The seed of what pyrobosim samples while it loads a world file (see load_world_file).
+LOAD_SEED = 0
 
 
 class WorldFileError(PlanBridgeError):
@@ -63,6 +65,14 @@ def load_world_file(path: str | Path) -> Any:
     # Its loggers are made (at INFO) while it loads: "Created world." and the like.
     disabled = logging.root.manager.disable
     logging.disable(max(disabled, logging.INFO))
+    # pyrobosim samples what a world file leaves open (an object's spawn and pose, a
+    # robot's pose at a location, a parent among choices) with numpy's global
+    # generator: drawn from a fixed seed, every load of a file is the same world, so
+    # the generated problem and the world the run acts on agree (and runs repeat).
+    import numpy as np
+
+    outer = np.random.get_state()
+    np.random.seed(LOAD_SEED)
     try:
         with quiet_stdout():
             world = WorldYamlLoader().from_file(file)
@@ -71,6 +81,7 @@ def load_world_file(path: str | Path) -> Any:
             f"{file}: pyrobosim could not load the world: {type(exc).__name__}: {exc}"
         ) from exc
     finally:
+        np.random.set_state(outer)
         logging.disable(disabled)
     quiet(world)
     stop_sensors(world)

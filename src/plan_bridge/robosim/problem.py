@@ -3,7 +3,9 @@
 :func:`describe_world` reads a loaded pyrobosim world into a :class:`WorldModel` (plain
 data: spots with their poses and rooms, gates, items, robots); :func:`problem_text`
 writes the problem of the shipped domain (``domain.pddl`` next to this module) for a
-goal that :func:`parse_goal` checked against the world's names.
+goal that :func:`parse_goal` checked against the world's names and refused when no run
+can reach it from the world as it is (:func:`.goal_checks.goal_blockers`: contradictions, locks,
+closed and locked hallways and locations in the way).
 
 Spots are where a robot stands: a room's navigation pose (named as the room), an object
 spawn (named as the spawn) and each end of a hallway (``HALLWAY_door_ROOM``: the end in
@@ -306,6 +308,14 @@ def parse_goal(text: str, model: WorldModel) -> list[Fact]:
         fact = _goal_atom(atom, model)
         if fact not in goal:
             goal.append(fact)
+    from plan_bridge.robosim.goal_checks import goal_blockers
+
+    blockers = goal_blockers(model, goal)
+    if blockers:
+        raise GoalError(
+            f"goal {' '.join(text.split())} cannot be reached in {model.name}: "
+            + "; ".join(blockers)
+        )
     return goal
 
 
@@ -332,6 +342,12 @@ def _allowed() -> str:
 
 
 def _goal_atom(atom: Any, model: WorldModel) -> Fact:
+    if isinstance(atom, list) and atom and str(atom[0]).lower() == "not":
+        raise GoalError(
+            f"goal atom {_show(atom)}: negated goals are not modelled (pyrobosim's goal "
+            f"vocabulary has no negation, and the robosim domain no predicate for a closed "
+            f"hallway or location): closing one cannot be a goal yet; {_allowed()}"
+        )
     if not isinstance(atom, list) or not atom or any(isinstance(a, list) for a in atom):
         raise GoalError(
             f"goal atom {_show(atom)}: not an atom such as (At apple0 table0); {_allowed()}"
@@ -417,7 +433,7 @@ def _kind(name: str, model: WorldModel, shown: str) -> str:
     )
 
 
-# -- the problem -----------------------------------------------------------------------
+# -- what blocks a goal ----------------------------------------------------------------
 
 
 def problem_text(model: WorldModel, goal: Sequence[Fact], name: str | None = None) -> str:

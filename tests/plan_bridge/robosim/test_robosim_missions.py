@@ -78,9 +78,11 @@ def test_cli_bad_goal_is_bad_input_and_goal_on_pddl_is_refused(
     assert "--goal is for pyrobosim worlds" in capsys.readouterr().err
 
 
-def test_an_impossible_goal_ends_with_exit_1_and_a_reason(
+def test_a_goal_the_world_blocks_is_refused_with_what_blocks_it(
     tmp_path: Path, test_world_file: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
+    # (A goal blocked during the run - events - ends with exit 1 and the planner's
+    # reason: test_shipped_worlds.py.)
     text = test_world_file.read_text().replace("$DATA", str(test_world_file.parent))
     locked = text.replace(
         "is_open: True\n    is_locked: False", "is_open: False\n    is_locked: True"
@@ -89,5 +91,5 @@ def test_an_impossible_goal_ends_with_exit_1_and_a_reason(
     world.write_text(locked)
     code = main(["run", str(world), "--goal", "(At robot bedroom)", "--planner", "kairos"])
     err = capsys.readouterr().err
-    assert code == 1
-    assert "goal NOT reached" in err and "no plan" in err
+    assert code == 2
+    assert "cannot get from kitchen to bedroom" in err and "closed and locked" in err

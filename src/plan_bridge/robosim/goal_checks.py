@@ -1,0 +1,255 @@
+"""Goals no run can reach from a pyrobosim world as it is loaded, and why.
+
+:func:`goal_blockers` is what :func:`~plan_bridge.robosim.problem.parse_goal` asks
+before any planning: atoms that contradict each other (a robot at two places, an
+object held by two robots, a hand empty and holding), and atoms the robots cannot
+make true (a lock - no robot action locks -, a place behind closed, locked hallways,
+an object in, or to be put in, a closed, locked location). It ignores the battery and
+what robots do to each other, so a planner may still find no plan; what it reports is
+certain.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Sequence
+
+from plan_bridge.pddl.task import Fact
+from plan_bridge.robosim.problem import WorldModel
+
+__all__ = ["goal_blockers"]
+
+
+#: Why a closed, locked gate stays closed.
+_SHUT = "closed and locked (robots open and close hallways and locations; none unlocks)"
+
+
+def goal_blockers(model: WorldModel, goal: Sequence[Fact]) -> list[str]:
+    """Why no run can reach ``goal`` (atoms of :func:`parse_goal`) from the world as it
+    is: atoms that contradict each other, and atoms the robots cannot make true (a
+    lock, a place behind closed, locked hallways, an object in or for a closed, locked
+    location). Empty when nothing is in the way as far as this can tell: it ignores
+    the battery and what the robots do to each other, so the planner may still find
+    no plan; what it reports is certain."""
+    reasons = _contradictions(model, goal)
+    if reasons:
+        return reasons
+    reach = {robot.name: _reachable(model, robot.spot) for robot in model.robots}
+    items: dict[str, tuple[set[str], set[str]]] = {}
+
+    def item(name: str) -> tuple[set[str], set[str]]:
+        if name not in items:
+            items[name] = _item_reach(model, name, reach)
+        return items[name]
+
+    for fact in goal:
+        reason = _blocker(model, fact, reach, item)
+        if reason:
+            reasons.append(reason)
+    return reasons
+
+
+def _contradictions(model: WorldModel, goal: Sequence[Fact]) -> list[str]:
+    """Atoms of ``goal`` that cannot hold together."""
+    where: dict[str, list[str]] = {}
+    """Robot or object -> the spots it is to be at."""
+    inside: dict[str, list[str]] = {}
+    """Object -> the locations it is to be at."""
+    held: dict[str, list[str]] = {}
+    """Object -> the robots to hold it."""
+    holds: dict[str, list[str]] = {}
+    """Robot -> the objects it is to hold."""
+    empty: set[str] = set()
+    for fact in goal:
+        name, *args = fact
+        if name == "At":
+            where.setdefault(args[0], []).append(args[1])
+        elif name == "Has":
+            inside.setdefault(args[1], []).append(args[0])
+        elif name == "Holding":
+            held.setdefault(args[1], []).append(args[0])
+            holds.setdefault(args[0], []).append(args[1])
+        elif name == "HandEmpty":
+            empty.add(args[0])
+    reasons = []
+    for thing, spots in where.items():
+        if len(spots) > 1:
+            reasons.append(f"{thing} cannot be at {' and at '.join(spots)} at once")
+    for obj, locations in inside.items():
+        if len(locations) > 1:
+            reasons.append(f"{obj} cannot be at {' and at '.join(locations)} at once")
+        for spawn in where.get(obj, []):
+            if spawn in model.spots and model.spots[spawn].gate not in locations:
+                reasons.append(f"{obj} cannot be on {spawn} and at {locations[0]} at once")
+    for obj, robots in held.items():
+        if len(robots) > 1:
+            reasons.append(f"{obj} cannot be held by {' and by '.join(robots)} at once")
+        if obj in where or obj in inside:
+            places = [*where.get(obj, []), *inside.get(obj, [])]
+            reasons.append(f"{obj} cannot be held by {robots[0]} and be at {places[0]}")
+    for robot, objects in holds.items():
+        if len(objects) > 1:
+            reasons.append(f"{robot} holds one object at a time, not {' and '.join(objects)}")
+        if robot in empty:
+            reasons.append(f"{robot} cannot hold {objects[0]} with its hand empty")
+    return reasons
+
+
+def _usable(model: WorldModel, gate: str | None) -> bool:
+    """Whether a gate is open or can be opened (it is not closed and locked)."""
+    info = model.gates.get(gate) if gate is not None else None
+    return info is not None and (info.is_open or not info.is_locked)
+
+
+def _reachable(model: WorldModel, start: str) -> set[str]:
+    """The spots a robot at ``start`` can drive to (hallways that are closed and locked
+    excepted; the battery ignored)."""
+    rooms: dict[str, list[str]] = {}
+    for place in model.spots.values():
+        rooms.setdefault(place.room, []).append(place.name)
+    ends: dict[str, list[str]] = {}
+    for hall, (a, b) in model.hall_ends.items():
+        if _usable(model, hall):
+            ends.setdefault(a, []).append(b)
+            ends.setdefault(b, []).append(a)
+    seen = {start}
+    todo = [start]
+    while todo:
+        spot = todo.pop()
+        info = model.spots.get(spot)
+        nearby = rooms.get(info.room, []) if info is not None else []
+        for other in (*nearby, *ends.get(spot, ())):
+            if other not in seen:
+                seen.add(other)
+                todo.append(other)
+    return seen
+
+
+def _item_reach(
+    model: WorldModel, item: str, reach: dict[str, set[str]]
+) -> tuple[set[str], set[str]]:
+    """(the spawns ``item`` can be brought to, the robots that can hold it)."""
+    spawn = model.items.get(item)
+    places = {spawn} if spawn is not None else set()
+    robots = {r.name for r in model.robots if r.holding == item}
+    while True:
+        takers = {
+            r.name
+            for r in model.robots
+            if any(s in reach[r.name] and _usable(model, model.spots[s].gate) for s in places)
+        }
+        drops = {
+            s
+            for r in robots | takers
+            for s in reach[r]
+            if model.spots[s].kind == "spawn" and _usable(model, model.spots[s].gate)
+        }
+        if takers <= robots and drops <= places:
+            return places, robots
+        robots |= takers
+        places |= drops
+
+
+def _shut_halls(model: WorldModel, reached: Iterable[str]) -> str:
+    """The closed, locked hallways between the spots ``reached`` and the others."""
+    inside = set(reached)
+    shut = [
+        hall
+        for hall, (a, b) in model.hall_ends.items()
+        if not _usable(model, hall) and (a in inside) != (b in inside)
+    ]
+    if not shut:
+        return "no hallway leads there"
+    return f"{', '.join(shut)} {'is' if len(shut) == 1 else 'are'} {_SHUT}"
+
+
+def _blocker(
+    model: WorldModel,
+    fact: Fact,
+    reach: dict[str, set[str]],
+    item: Callable[[str], tuple[set[str], set[str]]],
+) -> str:
+    """Why ``fact`` cannot be made true ("" when it can, as far as this can tell)."""
+    name, *args = fact
+    robots = {r.name: r for r in model.robots}
+    if name == "At" and args[0] in robots:
+        robot = robots[args[0]]
+        if args[1] in reach[robot.name]:
+            return ""
+        way = _shut_halls(model, reach[robot.name])
+        return f"{robot.name} cannot get from {robot.spot} to {args[1]}: {way}"
+    if name in ("At", "Has"):
+        obj, targets = (args[0], [args[1]]) if name == "At" else (args[1], [])
+        if name == "Has":
+            targets = [s for s in model.gates[args[0]].spawns if s in model.spots]
+        places, _ = item(obj)
+        if places & set(targets):
+            return ""
+        target = args[1] if name == "At" else args[0]
+        gate = model.spots[args[1]].gate if name == "At" else args[0]
+        if not _usable(model, gate):
+            return f"nothing can be put on {target}: {gate} is {_SHUT}"
+        return _why_stuck(model, obj, target, reach)
+    if name == "Holding":
+        _, holders = item(args[1])
+        if args[0] in holders:
+            return ""
+        return _why_stuck(model, args[1], args[0], reach)
+    if name == "HandEmpty":
+        robot = robots[args[0]]
+        if robot.holding is None or any(
+            model.spots[s].kind == "spawn" and _usable(model, model.spots[s].gate)
+            for s in reach[robot.name]
+        ):
+            return ""
+        return f"{robot.name} holds {robot.holding} and can reach no open location to put it"
+    if name == "IsOpen":
+        info = model.gates[args[0]]
+        if info.is_open:
+            return ""
+        if info.is_locked:
+            return f"{info.name} is {_SHUT}"
+        spots = {s.name for s in model.spots.values() if s.gate == info.name}
+        if any(spots & reach[r] for r in robots):
+            return ""
+        return f"no robot can get to {info.name}: {_shut_halls(model, _anyone(reach))}"
+    if name == "IsLocked":
+        if model.gates[args[0]].is_locked:
+            return ""
+        return (
+            f"{args[0]} is not locked and no robot action locks (pyrobosim's robots "
+            f"navigate, pick, place, open, close and detect; only the world's events lock: "
+            f"--events with lock:)"
+        )
+    if name == "Searched":
+        spot = model.spots[args[0]]
+        if not _usable(model, spot.gate):
+            return f"{args[0]} cannot be searched: {spot.gate} is {_SHUT}"
+        if any(args[0] in reach[r] for r in robots):
+            return ""
+        return f"no robot can get to {args[0]}: {_shut_halls(model, _anyone(reach))}"
+    return ""
+
+
+def _anyone(reach: dict[str, set[str]]) -> set[str]:
+    """The spots some robot can get to."""
+    return set().union(*reach.values())
+
+
+def _why_stuck(model: WorldModel, obj: str, target: str, reach: dict[str, set[str]]) -> str:
+    """Why ``obj`` cannot be brought to ``target`` (a spawn, a location or a robot)."""
+    spawn = model.items.get(obj)
+    if spawn is None:
+        holder = next((r.name for r in model.robots if r.holding == obj), "")
+        way = _shut_halls(model, reach.get(holder, ()))
+        return f"{holder} holds {obj} and cannot get to {target}: {way}"
+    gate = model.spots[spawn].gate if spawn in model.spots else None
+    if not _usable(model, gate):
+        return f"{obj} is in {gate}, which is {_SHUT}: no robot can take it out"
+    if not any(spawn in reach[r.name] for r in model.robots):
+        return f"no robot can get to {obj} on {spawn}: {_shut_halls(model, _anyone(reach))}"
+    takers = set().union(*(reach[r.name] for r in model.robots if spawn in reach[r.name]))
+    way = _shut_halls(model, takers)
+    return f"no robot that can get to {obj} on {spawn} can bring it to {target}: {way}"
+
+
+# -- the problem -----------------------------------------------------------------------
