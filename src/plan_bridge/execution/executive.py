@@ -25,6 +25,7 @@ from plan_bridge.execution.policy import ExecutionReport, ReplanPolicy
 from plan_bridge.execution.repair import Recovery
 from plan_bridge.execution.replanner import MissionEnded, Replanner
 from plan_bridge.execution.semantics import ActionModel
+from plan_bridge.execution.temporal import TemporalDispatch
 from plan_bridge.execution.world import (
     Observation,
     World,
@@ -86,6 +87,7 @@ class Executive(smach.Container):
         #: needed to resume: see :meth:`resume_from` and docs/reliability.md.
         self.checkpoint = checkpoint
         self._resume: dict[str, Any] | None = None
+        self._resume_plan_zero: float | None = None
         self._checkpoint_lock = threading.Lock()
         self._plan_in_force: list[PlanStep] = []
         self._first_in_force = 1
@@ -280,6 +282,9 @@ class Executive(smach.Container):
             world=self.world,
         )
         self._compiled = compiled
+        if isinstance(compiled.machine, TemporalDispatch):
+            # The first plan of a resumed run keeps the killed run's timeline.
+            compiled.machine.plan_zero, self._resume_plan_zero = self._resume_plan_zero, None
         compiled.machine._parent = self
         compiled.machine._adopt(self._bus, f"{self._path}/PLAN")
         self._records = {}
@@ -415,6 +420,11 @@ class Executive(smach.Container):
         values = self.belief.values
         if values:
             snapshot["values"] = sorted([format_fact(f), v] for f, v in values.items())
+        machine = None if self._compiled is None else self._compiled.machine
+        if isinstance(machine, TemporalDispatch):
+            zero = machine.plan_zero_now()
+            if zero is not None:  # a simulated clock: the resumed run keeps the timeline
+                snapshot["plan_zero"] = zero
         return snapshot
 
     def _settled_facts(self) -> frozenset[Fact]:
@@ -466,6 +476,8 @@ class Executive(smach.Container):
                 PlanStep(step.action, step.arguments, start, duration)
                 for step, (start, duration) in zip(plan, timing, strict=True)
             ]
+        zero = snapshot.get("plan_zero")
+        self._resume_plan_zero = float(zero) if isinstance(zero, int | float) else None
         self.decide("resume", f"resuming with {len(plan)} steps left from a checkpoint")
         return plan, int(snapshot["first_index"])
 

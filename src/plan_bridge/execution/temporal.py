@@ -625,7 +625,12 @@ class TemporalDispatch(smach.Container):
         #: Clock seconds per plan second: 1 on a simulated clock, else ``time_scale``.
         self.clock_per_plan_s = 1.0 if self.clock.simulated else time_scale
         origin = min((s.start or 0.0 for s in self.steps), default=0.0)
+        self._origin = origin
         self.planned_start = [(s.start or 0.0) - origin for s in self.steps]
+        self.plan_zero: float | None = None
+        """The clock time of plan time 0, when it is given (a resumed run continues the
+        timeline of the run it resumes: :meth:`plan_zero_now` of that run); None: the
+        plan's first step is due when the dispatch starts."""
         prints = footprints(self.steps, model)
         self.waits = precedence(self.steps, model, prints)
         self.end_waits = end_precedence(self.steps, model, prints)
@@ -732,8 +737,20 @@ class TemporalDispatch(smach.Container):
         with clock.turn(clock.admit(self.DISPATCHER_KEY)):
             return self._run_dispatch()
 
+    def plan_zero_now(self) -> float | None:
+        """While the dispatch runs on a simulated clock: the clock time of plan time 0
+        (what a checkpoint keeps so that a resumed run keeps the timeline)."""
+        run = self._run_state
+        if run is None or not self.clock.simulated:
+            return None
+        return run.t0 - self._origin * self.clock_per_plan_s
+
     def _run_dispatch(self) -> str | None:
-        run = _Dispatch(t0=self.clock.now(), waiting=list(range(len(self.steps))))
+        if self.plan_zero is None:
+            t0 = self.clock.now()
+        else:
+            t0 = self.plan_zero + self._origin * self.clock_per_plan_s
+        run = _Dispatch(t0=t0, waiting=list(range(len(self.steps))))
 
         def since_start(t0: float = time.monotonic()) -> float:
             return time.monotonic() - t0  # (wall seconds: the viewer's timeline)

@@ -361,3 +361,35 @@ def test_a_held_door_planned_to_close_as_the_robot_arrives_waits_for_the_robot()
     waits = end_precedence(plan, ActionModel(task))
     assert {(edge.before, edge.point) for edge in waits[0]} == {(1, "start"), (1, "end")}
     assert waits[1] == []  # the pass does not wait for the door to close
+
+
+def test_a_given_plan_zero_puts_the_steps_on_the_timeline_of_an_earlier_run(
+    task: PlanningTask,
+) -> None:
+    # A resumed run: plan time 0 was at clock time 3 in the killed run, so the step
+    # planned at 1.01 starts at 4.01 on the clock, not at once; a dispatch without it
+    # starts its first step at once. (What a checkpoint keeps: plan_zero_now.)
+    from plan_bridge.execution.clock import SimClock
+    from plan_bridge.execution.temporal import compile_temporal
+
+    seen: dict[str, float] = {}
+    for label, zero in (("given", 3.0), ("none", None)):
+        clock = SimClock()
+        registry = SkillRegistry()
+
+        def note(ud: smach.UserData, label: str = label, clock: SimClock = clock) -> str:
+            seen[label] = clock.now()
+            return "succeeded"
+
+        registry.fallback = lambda step, note=note: smach.CBState(note, outcomes=["succeeded"])
+        model = ActionModel(task)
+        belief = WorldState(task.initial_facts, model.initial_values())
+        belief.observe([(("docked", "scout"), False), (("light-on", "yard"), True)])
+        compiled = compile_temporal([PLAN[2]], registry, model, belief, clock=clock)
+        dispatch = compiled.machine
+        assert isinstance(dispatch, TemporalDispatch)
+        dispatch.plan_zero = zero
+        assert dispatch.plan_zero_now() is None  # not running
+        assert dispatch.execute() == "succeeded"
+    assert seen["given"] == pytest.approx(4.01)
+    assert seen["none"] == pytest.approx(0.0)
