@@ -16,7 +16,7 @@ It fetches an object to a spawn, goals ``(At OBJECT SPAWN)`` (with ``(HandEmpty
 ROBOT)`` if wanted): ``fetch_soda`` and ``apple_to_table`` of goals.yaml. Anything
 unanticipated (every way closed, three failures in a row) ends it ``aborted``::
 
-    GO_TO_OBJECT -> OPEN -> PICK -> GO_TO_TARGET -> PLACE -> succeeded
+    FETCH (GO_TO_OBJECT -> OPEN -> PICK -> GO_TO_TARGET -> PLACE) -> succeeded
     GO_TO_X = CHECK_BATTERY --enough--> DRIVE --blocked--> CHECK_BATTERY (another way)
                             --low--> TO_CHARGER -> CHARGE -> CHECK_BATTERY
 
@@ -29,9 +29,9 @@ from pathlib import Path
 
 import smach
 from plan_bridge.missions.mission import ScriptedMission
-from plan_bridge.missions.world_target import variant_events
+from plan_bridge.missions.world_target import scripted_world
 from plan_bridge.pddl.task import PlanningTask
-from plan_bridge.robosim.scripting import Act, charger_spot, go_to
+from plan_bridge.robosim.scripting import charger_spot, deliver, locked_halls
 from plan_bridge.robosim.world import RobosimWorld
 
 __all__ = ["scripted"]
@@ -67,47 +67,15 @@ def scripted(
     task: PlanningTask, *, seed: int, fail_rate: float, variant: str = ""
 ) -> ScriptedMission:
     """The whole mission as one hand-written machine acting on a fresh world."""
-    world = RobosimWorld(
-        FOLDER / "world.yaml",
-        task.goal_facts,
-        seed=seed,
-        fail_rate=fail_rate,
-        events=variant_events(FOLDER, variant),
-    )
-    model = world.model
+    world = scripted_world(FOLDER, task, seed=seed, fail_rate=fail_rate, variant=variant)
     robot, item, target = _fetch_goal(task, world)
-    source = model.items[item]
-    if source is None:
-        raise ValueError(f"{item} is held at the start: nothing to fetch")
-    charger = charger_spot(world)
     mission = smach.StateMachine(outcomes=OUTCOMES)
-    mission.userdata.blocked = sorted(h for h in model.hall_ends if model.gates[h].is_locked)
+    mission.userdata.blocked = locked_halls(world)
     mission.userdata.legs = []
-    location, target_location = model.spots[source].gate or "", model.spots[target].gate or ""
     with mission:
         smach.StateMachine.add(
-            "GO_TO_OBJECT",
-            go_to(world, robot, source, charger),
-            {"arrived": "OPEN", "failed": "aborted"},
-        )
-        smach.StateMachine.add(
-            "OPEN",
-            Act(world, robot, "open", location, source),
-            {"done": "PICK", "failed": "aborted"},
-        )
-        smach.StateMachine.add(
-            "PICK",
-            Act(world, robot, "pick", item, source, location),
-            {"done": "GO_TO_TARGET", "failed": "aborted"},
-        )
-        smach.StateMachine.add(
-            "GO_TO_TARGET",
-            go_to(world, robot, target, charger),
-            {"arrived": "PLACE", "failed": "aborted"},
-        )
-        smach.StateMachine.add(
-            "PLACE",
-            Act(world, robot, "place", item, target, target_location),
-            {"done": "succeeded", "failed": "aborted"},
+            "FETCH",
+            deliver(world, robot, item, target, charger_spot(world)),
+            {"done": "succeeded"},
         )
     return ScriptedMission(mission, world)

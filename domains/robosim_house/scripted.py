@@ -26,9 +26,18 @@ from pathlib import Path
 
 import smach
 from plan_bridge.missions.mission import ScriptedMission
-from plan_bridge.missions.world_target import variant_events
+from plan_bridge.missions.world_target import scripted_world
 from plan_bridge.pddl.task import PlanningTask
-from plan_bridge.robosim.scripting import Act, charger_spot, go_to, route, route_length
+from plan_bridge.robosim.scripting import (
+    KEYS,
+    Act,
+    charger_spot,
+    deliver,
+    go_to,
+    locked_halls,
+    route,
+    route_length,
+)
 from plan_bridge.robosim.world import RobosimWorld
 
 __all__ = ["scripted"]
@@ -36,7 +45,6 @@ __all__ = ["scripted"]
 FOLDER = Path(__file__).resolve().parent
 OUTCOMES = ["succeeded", "aborted", "preempted"]
 _PART = ["done", "aborted", "preempted"]
-KEYS = ["blocked", "legs"]
 
 
 class _Plan:
@@ -78,44 +86,6 @@ def _nearest_first(world: RobosimWorld, start: str, spots: list[str]) -> list[st
     return order
 
 
-def _deliver(
-    world: RobosimWorld, robot: str, item: str, target: str, charger: str | None
-) -> smach.StateMachine:
-    model = world.model
-    source = model.items[item]
-    if source is None:
-        raise ValueError(f"{item} is held at the start: nothing to carry")
-    location, target_location = model.spots[source].gate or "", model.spots[target].gate or ""
-    sm = smach.StateMachine(outcomes=_PART, input_keys=KEYS, output_keys=KEYS)
-    with sm:
-        smach.StateMachine.add(
-            "GO_TO_OBJECT",
-            go_to(world, robot, source, charger),
-            {"arrived": "OPEN", "failed": "aborted"},
-        )
-        smach.StateMachine.add(
-            "OPEN",
-            Act(world, robot, "open", location, source),
-            {"done": "PICK", "failed": "aborted"},
-        )
-        smach.StateMachine.add(
-            "PICK",
-            Act(world, robot, "pick", item, source, location),
-            {"done": "GO_TO_TARGET", "failed": "aborted"},
-        )
-        smach.StateMachine.add(
-            "GO_TO_TARGET",
-            go_to(world, robot, target, charger),
-            {"arrived": "PLACE", "failed": "aborted"},
-        )
-        smach.StateMachine.add(
-            "PLACE",
-            Act(world, robot, "place", item, target, target_location),
-            {"failed": "aborted"},
-        )
-    return sm
-
-
 def _search(world: RobosimWorld, robot: str, spawn: str, charger: str | None) -> smach.StateMachine:
     location = world.model.spots[spawn].gate or ""
     sm = smach.StateMachine(outcomes=_PART, input_keys=KEYS, output_keys=KEYS)
@@ -147,20 +117,14 @@ def scripted(
     task: PlanningTask, *, seed: int, fail_rate: float, variant: str = ""
 ) -> ScriptedMission:
     """The whole mission as one hand-written machine acting on a fresh world."""
-    world = RobosimWorld(
-        FOLDER / "world.yaml",
-        task.goal_facts,
-        seed=seed,
-        fail_rate=fail_rate,
-        events=variant_events(FOLDER, variant),
-    )
+    world = scripted_world(FOLDER, task, seed=seed, fail_rate=fail_rate, variant=variant)
     model = world.model
     plan = _Plan(task, world)
     robot, charger = plan.robot, charger_spot(world)
     start = next(r.spot for r in model.robots if r.name == robot)
     after_deliveries = plan.deliveries[-1][1] if plan.deliveries else start
     parts: list[tuple[str, smach.StateMachine]] = [
-        (f"DELIVER_{item.upper()}", _deliver(world, robot, item, target, charger))
+        (f"DELIVER_{item.upper()}", deliver(world, robot, item, target, charger))
         for item, target in plan.deliveries
     ]
     parts += [
@@ -170,7 +134,7 @@ def scripted(
     if plan.end_at is not None:
         parts.append(("END_AT", _end_at(world, robot, plan.end_at, charger)))
     mission = smach.StateMachine(outcomes=OUTCOMES)
-    mission.userdata.blocked = sorted(h for h in model.hall_ends if model.gates[h].is_locked)
+    mission.userdata.blocked = locked_halls(world)
     mission.userdata.legs = []
     with mission:
         for number, (label, part) in enumerate(parts):

@@ -33,13 +33,14 @@ from pathlib import Path
 
 import smach
 from plan_bridge.missions.mission import ScriptedMission
-from plan_bridge.missions.world_target import variant_events
+from plan_bridge.missions.world_target import scripted_world
 from plan_bridge.pddl.task import PlanningTask
 from plan_bridge.robosim.scripting import (
     Act,
     TurnTakingConcurrence,
     charger_spot,
     go_to,
+    locked_halls,
     route,
     route_length,
 )
@@ -212,13 +213,7 @@ def scripted(
     task: PlanningTask, *, seed: int, fail_rate: float, variant: str = ""
 ) -> ScriptedMission:
     """Both robots' machines at once, acting on a fresh world."""
-    world = RobosimWorld(
-        FOLDER / "world.yaml",
-        task.goal_facts,
-        seed=seed,
-        fail_rate=fail_rate,
-        events=variant_events(FOLDER, variant),
-    )
+    world = scripted_world(FOLDER, task, seed=seed, fail_rate=fail_rate, variant=variant)
     jobs = share_out(world, _deliveries(task, world))
     charger = charger_spot(world)
     robots = [r.name for r in world.model.robots]
@@ -231,8 +226,7 @@ def scripted(
         input_keys=["blocked", *legs],
         output_keys=["blocked", *legs],
     )
-    model = world.model
-    mission.userdata.blocked = sorted(h for h in model.hall_ends if model.gates[h].is_locked)
+    mission.userdata.blocked = locked_halls(world)
     for robot, key in zip(robots, legs, strict=True):
         mission.userdata[key] = []
         machine = _robot_machine(world, robot, jobs[robot], charger)

@@ -24,14 +24,15 @@ from typing import TYPE_CHECKING
 from plan_bridge.errors import PlanBridgeError
 from plan_bridge.missions.mission import MissionSetup, Target, TargetError, load_domain_module
 from plan_bridge.pddl.constructs import did_you_mean
-from plan_bridge.pddl.task import load_task_from_text
+from plan_bridge.pddl.task import PlanningTask, load_task_from_text
 from plan_bridge.robosim.events import WorldEvent, check_events, load_events
 from plan_bridge.robosim.target_files import read_goals
 
 if TYPE_CHECKING:
     from plan_bridge.planning.worker import WorkerPool
+    from plan_bridge.robosim.world import RobosimWorld
 
-__all__ = ["WorldTarget", "load_world_target", "variant_events"]
+__all__ = ["WorldTarget", "load_world_target", "scripted_world", "variant_events"]
 
 
 @dataclass
@@ -91,6 +92,22 @@ def variant_events(folder: Path, variant: str) -> list[WorldEvent]:
             f"folder are its events/NAME.yaml files: {', '.join(names) or 'none'}"
         )
     return load_events(file)
+
+
+def scripted_world(
+    folder: Path, task: PlanningTask, *, seed: int, fail_rate: float, variant: str = ""
+) -> RobosimWorld:
+    """The world of one run of a world folder's scripted baseline: its ``world.yaml``
+    with the task's goal, the run's seed and fail rate, and the variant's events."""
+    from plan_bridge.robosim.world import RobosimWorld
+
+    return RobosimWorld(
+        folder / "world.yaml",
+        task.goal_facts,
+        seed=seed,
+        fail_rate=fail_rate,
+        events=variant_events(folder, variant),
+    )
 
 
 def load_world_target(

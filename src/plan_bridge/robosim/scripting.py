@@ -15,7 +15,8 @@ author anticipates, built from these states:
 * :class:`Act` runs one action (pick, place, open, close, charge, detect), tried three
   times; opening what is open already is done at once;
 * :func:`go_to` chains them: check the battery, charge first when it is low, drive,
-  and look for another way when blocked.
+  and look for another way when blocked; :func:`deliver` carries an object (go to it,
+  open its location, pick, go to the target, place).
 
 The machines share the userdata keys ``blocked`` (hallways known impassable) and
 ``legs`` (the legs driven, for reports).
@@ -41,7 +42,9 @@ __all__ = [
     "SkillState",
     "TurnTakingConcurrence",
     "charger_spot",
+    "deliver",
     "go_to",
+    "locked_halls",
     "route",
     "route_length",
 ]
@@ -257,15 +260,65 @@ class Act(SkillState):
         return "failed"
 
 
+def locked_halls(world: RobosimWorld) -> list[str]:
+    """The hallways locked in the world as loaded: the ``blocked`` a mission starts with."""
+    model = world.model
+    return sorted(hall for hall in model.hall_ends if model.gates[hall].is_locked)
+
+
+#: The userdata keys of the machines here: hallways known blocked, legs driven.
+KEYS = ["blocked", "legs"]
+
+
+def deliver(
+    world: RobosimWorld, robot: str, item: str, target: str, charger: str | None = None
+) -> smach.StateMachine:
+    """``GO_TO_OBJECT -> OPEN -> PICK -> GO_TO_TARGET -> PLACE``: carry ``item`` to spawn
+    ``target``; outcomes ``done``, ``aborted``, ``preempted``."""
+    model = world.model
+    source = model.items[item]
+    if source is None:
+        raise ValueError(f"{item} is held at the start: nothing to carry")
+    location, target_location = model.spots[source].gate or "", model.spots[target].gate or ""
+    sm = smach.StateMachine(
+        outcomes=["done", "aborted", "preempted"], input_keys=KEYS, output_keys=KEYS
+    )
+    with sm:
+        smach.StateMachine.add(
+            "GO_TO_OBJECT",
+            go_to(world, robot, source, charger),
+            {"arrived": "OPEN", "failed": "aborted"},
+        )
+        smach.StateMachine.add(
+            "OPEN",
+            Act(world, robot, "open", location, source),
+            {"done": "PICK", "failed": "aborted"},
+        )
+        smach.StateMachine.add(
+            "PICK",
+            Act(world, robot, "pick", item, source, location),
+            {"done": "GO_TO_TARGET", "failed": "aborted"},
+        )
+        smach.StateMachine.add(
+            "GO_TO_TARGET",
+            go_to(world, robot, target, charger),
+            {"arrived": "PLACE", "failed": "aborted"},
+        )
+        smach.StateMachine.add(
+            "PLACE",
+            Act(world, robot, "place", item, target, target_location),
+            {"failed": "aborted"},
+        )
+    return sm
+
+
 def go_to(
     world: RobosimWorld, robot: str, goal: str, charger: str | None = None
 ) -> smach.StateMachine:
     """``CHECK_BATTERY -> DRIVE`` (another way when blocked), charging first when the
     battery is low: outcomes ``arrived``, ``failed``, ``preempted``."""
     sm = smach.StateMachine(
-        outcomes=["arrived", "failed", "preempted"],
-        input_keys=["blocked", "legs"],
-        output_keys=["blocked", "legs"],
+        outcomes=["arrived", "failed", "preempted"], input_keys=KEYS, output_keys=KEYS
     )
     with sm:
         smach.StateMachine.add(
