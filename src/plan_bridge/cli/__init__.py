@@ -30,6 +30,7 @@ MODULES = (
     "plan_bridge.cli.control",
     "plan_bridge.cli.plan",
     "plan_bridge.cli.problem",
+    "plan_bridge.cli.import_plansys2",
     "plan_bridge.cli.skills",
     "plan_bridge.cli.view",
     "plan_bridge.cli.study",

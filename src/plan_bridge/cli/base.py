@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import argparse
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TextIO
@@ -25,6 +25,7 @@ __all__ = [
     "EXIT_INTERNAL",
     "EXIT_OK",
     "Command",
+    "Findings",
     "PddlInput",
     "Terminated",
     "add_input_arguments",
@@ -113,8 +114,10 @@ def add_input_arguments(parser: argparse.ArgumentParser, *, optional: bool = Fal
     parser.add_argument(
         "--goal",
         metavar="GOAL",
-        help="for a pyrobosim world (TARGET is WORLD.yaml or a folder with world.yaml): the "
-        'goal in pyrobosim\'s vocabulary, e.g. "(At apple0 table0_tabletop)" (see docs/sim.md)',
+        help='the goal to plan for, in place of the problem\'s (e.g. "(visited wp1)": '
+        "ROSPlan-style problems leave (:goal (and)) to be filled at run time); for a "
+        "pyrobosim world (WORLD.yaml or a folder with world.yaml), in pyrobosim's "
+        'vocabulary, e.g. "(At apple0 table0_tabletop)" (see docs/sim.md)',
     )
 
 
@@ -151,6 +154,8 @@ def resolve_input(args: argparse.Namespace, *, every_problem: bool = False) -> P
     world = _world_input(args, target, every_problem)
     if world is not None:
         return world
+    # A goal given at run time is for one problem: the one `run` would plan.
+    every_problem = every_problem and getattr(args, "goal", None) is None
     if not target.exists():
         if target.suffix == ".pddl" or args.problem is not None:
             raise InputError(f"{target}: domain file not found; expected a PDDL domain file")
@@ -190,11 +195,6 @@ def _world_input(args: argparse.Namespace, target: Path, every_problem: bool) ->
 
     world = world_file_of(target)
     if world is None:
-        if getattr(args, "goal", None) is not None:
-            raise InputError(
-                f"{target}: --goal is for pyrobosim worlds (WORLD.yaml, or a folder with "
-                f"world.yaml); a PDDL target's goal is in its problem file"
-            )
         return None
     from plan_bridge.robosim.target_files import DOMAIN_PATH
 
@@ -206,19 +206,37 @@ def _world_input(args: argparse.Namespace, target: Path, every_problem: bool) ->
     return PddlInput(DOMAIN_PATH, goals if every_problem else goals[:1], target, world)
 
 
-def check_input(domain: Path, problem: Path) -> list[str]:
+class Findings(list[str]):
+    """The warnings of :func:`check_input`, and its ``notes`` (printed as ``note: ...``)."""
+
+    def __init__(self, warnings: Iterable[str] = (), notes: Iterable[str] = ()) -> None:
+        super().__init__(warnings)
+        self.notes = list(notes)
+
+
+def check_input(domain: Path, problem: Path, goal: str | None = None) -> Findings:
     """The front end's verdict on one domain and problem, the same for every command:
     raises :class:`~plan_bridge.errors.PddlError` (exit 2) for bad or unsupported
-    input, including features whose engines are not installed; returns the warnings.
+    input, including features whose engines are not installed; returns the warnings
+    (and, as a note, the goal of the problem that ``goal`` replaces).
     Imports no unified-planning. A pyrobosim world's problem is generated (and checked)
     when the target loads: nothing to check here."""
     from plan_bridge.robosim.target_files import DOMAIN_PATH
 
     if domain == DOMAIN_PATH and problem.suffix != ".pddl":
-        return []
+        return Findings()
     from plan_bridge.pddl.front_end import analyse_files
 
-    front = analyse_files(domain, problem)
+    notes: list[str] = []
+    if goal is None:
+        front = analyse_files(domain, problem)
+    else:
+        from plan_bridge.missions.given_goal import analyse_with_goal
+
+        front, given = analyse_with_goal(domain, problem, goal)
+        note = given.note()
+        if note is not None:
+            notes.append(note)
     front.require_engines()
     # Printed as "warning: FILE:LINE:COL: ...": the word once, in front.
-    return [w.replace(": warning: ", ": ", 1) for w in front.warnings]
+    return Findings([w.replace(": warning: ", ": ", 1) for w in front.warnings], notes)

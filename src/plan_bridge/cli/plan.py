@@ -51,8 +51,12 @@ def _run_plan(args: argparse.Namespace) -> int:
         # a fraction of a second, with the same verdict as `check` and `run`.
         chosen = resolve_input(args)
         domain, problem = chosen.domain, chosen.problems[0]
-        for warning in check_input(domain, problem):
+        goal = args.goal if chosen.world is None else None  # a world's goal: checked on load
+        findings = check_input(domain, problem, goal)
+        for warning in findings:
             progress(f"warning: {warning}")
+        for note in findings.notes:
+            progress(f"note: {note}")
     except (InputError, PlanBridgeError) as exc:
         return fail(str(exc))
 
@@ -75,6 +79,17 @@ def _run_plan(args: argparse.Namespace) -> int:
                 prime=default_pool(),
                 before_parse=lambda: planners.append(get_planner(args.planner)),
             ).task
+        elif goal is not None:  # the goal given at run time, in place of the problem's
+            from plan_bridge.missions.given_goal import load_task_with_goal
+
+            task, given = load_task_with_goal(
+                domain,
+                problem,
+                goal,
+                prime=default_pool(),
+                before_parse=lambda: planners.append(get_planner(args.planner)),
+            )
+            goal = given.goal  # on one line, comments blanked: as `run` shows it
         else:
             task = load_task(
                 domain,
@@ -109,6 +124,8 @@ def _run_plan(args: argparse.Namespace) -> int:
         payload = result.to_json()
         payload["domain"] = str(domain)
         payload["problem"] = str(problem)
+        if args.goal is not None:
+            payload["goal"] = goal or " ".join(args.goal.split())
         print(json.dumps(payload, indent=None))
     else:
         for warning in result.warnings:

@@ -220,7 +220,11 @@ class ProgressPrinter:
         initial = event.reason == "initial plan"
         if event.status == "solved":
             makespan = f", makespan {event.makespan:.2f} s" if event.makespan is not None else ""
-            text = f"{len(event.steps)} steps{makespan} ({event.planner}, {event.planning_time_s:.2f} s)"
+            count = len(event.steps)
+            text = (
+                f"{count} step{'' if count == 1 else 's'}{makespan} "
+                f"({event.planner}, {event.planning_time_s:.2f} s)"
+            )
         else:
             text = f"{event.status}: {event.explanation}"
         if self.verbose:

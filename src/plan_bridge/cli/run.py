@@ -205,7 +205,8 @@ RESUMABLE = (
 RESUMED_UNLESS_GIVEN = ("time_scale",)
 #: What a pyrobosim world's run needs besides the target (None for other targets):
 #: its goal (the text, so that a goals.yaml edited since does not change the run)
-#: and its events file. Taken from the journal; journals written before lack them.
+#: and its events file; a PDDL problem's run, the goal given with --goal (None: the
+#: file's). Taken from the journal; journals written before lack them.
 RESUMED_WORLD = ("goal", "events")
 
 
@@ -220,7 +221,7 @@ def _resume_arguments(
     given = [f"--{key}" for key in RESUMED_WORLD if getattr(args, key) is not None]
     if given:
         return fail(
-            f"with --resume, the goal and events of a pyrobosim run come from the journal: "
+            f"with --resume, the goal and events of the run come from the journal: "
             f"give no {' or '.join(given)}"
         )
     try:
@@ -264,7 +265,8 @@ def _world_options(args: argparse.Namespace, target: Target) -> dict[str, Any]:
     from plan_bridge.missions.world_target import WorldTarget
 
     if not isinstance(target, WorldTarget):
-        return dict.fromkeys(RESUMED_WORLD)
+        # A PDDL problem's goal given with --goal is resumed by its text too.
+        return {**dict.fromkeys(RESUMED_WORLD), "goal": target.given_goal}
     return {
         # A goal of goals.yaml is resumed by its text, under its name.
         "problem": target.goal_name or str(target.problem_path),
@@ -328,12 +330,15 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
     try:
         # The same front-end verdict as `check` and `plan`, before anything heavy loads.
         chosen = resolve_input(args)
-        input_warnings = check_input(chosen.domain, chosen.problems[0])
+        pddl_goal = args.goal if chosen.world is None else None  # a world's: checked on load
+        input_warnings = check_input(chosen.domain, chosen.problems[0], pddl_goal)
     except InputError as exc:
         return fail(str(exc))
     if not args.quiet:
         for warning in input_warnings:
             print(f"warning: {warning}", file=sys.stderr, flush=True)
+        for note in input_warnings.notes:
+            print(f"note: {note}", file=sys.stderr, flush=True)
     from plan_bridge.missions.mission import MissionSetup, load_target
     from plan_bridge.planning.planner import Planner, get_planner
     from plan_bridge.planning.worker import default_pool
@@ -384,6 +389,10 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
         robot_prefix = robot.prefix
     mission = prepare_mission(target, options, setup=setup, planner=planners[0])
     executive = mission.executive
+    if args.ros:
+        # The mission's problem as a knowledge base, PlanSys2-style services on the
+        # executive's node (/knowledge/add_problem_goal, ...; docs/planning.md).
+        robot.serve_knowledge(mission.attach_knowledge())
     if checkpoint is not None:
         mission.resume(checkpoint)
     out = sys.stderr
@@ -485,7 +494,8 @@ def _check(args: argparse.Namespace) -> int:
     name = ""
     for problem in chosen.problems:
         try:
-            warnings = check_input(chosen.domain, problem)
+            pddl_goal = args.goal if chosen.world is None else None  # a world's: checked on load
+            warnings = check_input(chosen.domain, problem, pddl_goal)
             loaded = load_target(args.target, problem, goal=args.goal)
             setup = loaded.setup(seed=0, fail_rate=0.0)
         except PlanBridgeError as exc:
@@ -497,11 +507,14 @@ def _check(args: argparse.Namespace) -> int:
         name = loaded.name
         for warning in warnings:
             print(f"warning: {warning}", file=sys.stderr)
+        for note in warnings.notes:
+            print(f"note: {note}", file=sys.stderr)
         for line in setup.skills.check(loaded.task):
             problems_found.append(f"{problem.name}: {line}")
         print(
             f"{problem.name}: {len(loaded.task.actions)} actions, {len(loaded.task.objects)} objects, "
-            f"{len(loaded.task.goal_facts)} goal atoms",
+            f"{len(loaded.task.goal_facts)} goal atoms"
+            + (" (given with --goal)" if loaded.given_goal is not None else ""),
             file=sys.stderr,
         )
         from plan_bridge.planning.engines import engines_for, problem_kind

@@ -7,6 +7,11 @@ plan, and after a failed or invalid step follows the recovery ladder of
 :mod:`.repair` (continue, retry, repair, replan, hold) within the policy's budgets
 (:mod:`.policy`). Every decision is an
 :class:`~plan_bridge.execution.events.ExecutiveDecision` event with its reason.
+
+(Over 600 lines: the mission loop, the operator's and the knowledge base's hooks
+(:mod:`.control`, :mod:`.knowledge_link`) and the checkpoints share the plan in force,
+the belief and the task of one container; split, each part would reach into the
+others' state.)
 """
 
 from __future__ import annotations
@@ -18,6 +23,7 @@ from collections.abc import Callable, Iterable, Sequence
 from typing import TYPE_CHECKING, Any
 
 import smach
+from plan_bridge.errors import FactError, PlanBridgeError
 from plan_bridge.execution.compile import CompiledPlan, StepRecord, StepState, compile_plan
 from plan_bridge.execution.events import ExecutiveDecision, PlanComputed
 from plan_bridge.execution.plan_cache import PlanCache
@@ -40,6 +46,8 @@ from smach.introspection.events import stamp
 
 if TYPE_CHECKING:
     from plan_bridge.execution.control import MissionControl
+    from plan_bridge.execution.knowledge_link import KnowledgeLink
+    from plan_bridge.pddl.knowledge import KnowledgeBase
 
 __all__ = ["ExecutionReport", "Executive", "ReplanPolicy"]
 
@@ -60,6 +68,10 @@ class Executive(smach.Container):
     the registry's simulated skills act on (``symbolic_skills(world, registry)``), if
     any. It learns what the user's own skills did and is sensed after a failure that
     observed nothing (docs/plan-bridge.md, "The skill contract").
+
+    ``knowledge``: a :class:`~plan_bridge.pddl.knowledge.KnowledgeBase` holding the
+    problem (:meth:`attach_knowledge`): the belief is its facts, and the mission
+    follows its objects and goal (a change of them stops the plan and replans).
     """
 
     #: Operator requests (skip, replan, new goal, abort): see execution/control.py.
@@ -81,6 +93,7 @@ class Executive(smach.Container):
         output_keys: Iterable[str] = (),
         checkpoint: Callable[[dict[str, Any]], None] | None = None,
         plan_cache: PlanCache | None = None,
+        knowledge: KnowledgeBase | None = None,
     ) -> None:
         super().__init__(list(OUTCOMES), input_keys, output_keys)
         #: Called (from the step's thread) after every succeeded step with the state
@@ -119,6 +132,11 @@ class Executive(smach.Container):
         self._recovery: Recovery | None = None
         self._running = False
         self._records: dict[int, StepRecord] = {}
+        #: The knowledge base the mission follows (None: the task's problem).
+        self.knowledge: KnowledgeBase | None = None
+        self._link: KnowledgeLink | None = None
+        if knowledge is not None:
+            self.attach_knowledge(knowledge)
 
     # -- Container interface ---------------------------------------------------------------
     def get_children(self) -> dict[str, smach.State]:
@@ -193,6 +211,9 @@ class Executive(smach.Container):
         resume, self._resume = self._resume, None
         if resume is not None:
             plan, self._next_label = self._restore(resume)
+        news = self._take_knowledge()
+        if news:
+            self.decide("knowledge", f"planning for the knowledge base's problem ({news})")
         replanner = self._replanner
         if (
             replanner is None
@@ -230,11 +251,15 @@ class Executive(smach.Container):
             self._check_preempt()
             if self.operator is not None:  # an operator request replaces the plan
                 plan = self.operator.take(self, plan)
+            if self._knowledge_pending():  # the knowledge base's objects or goal changed
+                plan = self.replan_now("the knowledge base changed")
             first = self._next_label
             outcome, failed = self._run_plan(plan, first)
             self._next_label = max(self._records, default=first - 1) + 1
             if self.operator is not None and self.operator.pending() is not None:
                 continue  # the operator stopped this plan: take the request
+            if self._knowledge_pending():
+                continue  # stopped for a change of the knowledge base: replan
             if outcome == "preempted":
                 self.decide("stop", "preempted")
                 return "preempted"
@@ -290,7 +315,7 @@ class Executive(smach.Container):
         self._records = {}
         self._plan_in_force, self._first_in_force = plan, first_index
         self.report.final_plan = [str(s) for s in plan]
-        if self._preempt_requested:
+        if self._preempt_requested or self._knowledge_pending():
             compiled.machine.request_preempt()
         ud = smach.Remapper(
             self.userdata,
@@ -373,10 +398,21 @@ class Executive(smach.Container):
         replanner, recovery = self._replanner, self._recovery
         if replanner is None or recovery is None:
             raise RuntimeError(f"executive {self.path}: replan_now is for a running mission")
+        operator_goal = task is not None and self.knowledge is not None
+        if task is not None and self.knowledge is not None:
+            # The goal lives in the knowledge base: it takes the new one, and the
+            # mission plans for the knowledge base's problem.
+            try:
+                self.knowledge.set_goal(task.goal_facts, source="operator")
+            except FactError as exc:  # it changed since the request was checked
+                self.decide("knowledge", f"the knowledge base refused the goal: {exc}")
+            task = None
+        news = self._take_knowledge()
+        if news and not operator_goal:
+            reason = f"{reason}: {news}"
+            self.decide("knowledge", reason)
         if task is not None:
-            model = ActionModel(task)
-            self.task = replanner.task = task
-            self.model = replanner.model = recovery.model = model
+            self._use_task(task)
         if self.model.goal_holds(self.belief.facts):
             raise MissionEnded("succeeded", f"{reason}; the goal holds")
         result = replanner.plan(reason, replan=True)
@@ -387,6 +423,48 @@ class Executive(smach.Container):
         self.report.replans += 1
         recovery.generation += 1  # retries are counted per plan
         return list(result.actions)
+
+    # -- the knowledge base (execution/knowledge_link.py) ------------------------------------
+    def attach_knowledge(self, knowledge: KnowledgeBase) -> None:
+        """Follow ``knowledge``: its facts become the belief's; a change of its objects
+        or goal stops the plan in force and replans; an operator's new goal goes into it."""
+        from plan_bridge.execution.knowledge_link import KnowledgeLink
+
+        if self._running:
+            raise RuntimeError(f"executive {self.path}: attach a knowledge base before the run")
+        self.detach_knowledge()
+        self._link = KnowledgeLink(knowledge, self.belief, self.task, self._knowledge_changed)
+        self.knowledge = knowledge
+
+    def detach_knowledge(self) -> None:
+        """Stop following the knowledge base (it keeps a copy of the facts)."""
+        if self._link is not None:
+            self._link.close()
+        self._link, self.knowledge = None, None
+
+    def _knowledge_changed(self) -> None:
+        if self._running:
+            self.stop_plan()
+
+    def _take_knowledge(self) -> str:
+        """What changed in the knowledge base (the task is rebuilt from it), or ``""``."""
+        try:
+            news, task = self._link.take() if self._link is not None else ("", None)
+        except PlanBridgeError as exc:  # its problem does not load (a bug of ours, or UP's)
+            raise MissionEnded("aborted", f"the knowledge base's problem: {exc}") from exc
+        if task is not None:
+            self._use_task(task)
+        return news
+
+    def _knowledge_pending(self) -> bool:
+        return self._link is not None and self._link.changed
+
+    def _use_task(self, task: PlanningTask) -> None:
+        self.task, self.model = task, ActionModel(task)
+        if self._replanner is not None:
+            self._replanner.task, self._replanner.model = task, self.model
+        if self._recovery is not None:
+            self._recovery.model = self.model
 
     # -- checkpoints ------------------------------------------------------------------------------
     def snapshot(self) -> dict[str, Any]:

@@ -249,6 +249,18 @@ class WorldState:
             self._changed()
         return changed
 
+    def forget_values(self, atoms: Iterable[Fact]) -> list[Fact]:
+        """Drop numeric atoms' values (they become unknown); returns those that had one."""
+        with self._lock:
+            forgotten = [
+                a for a in dict.fromkeys(atoms) if self._facts.values.pop(a, None) is not None
+            ]
+            if forgotten:
+                self.version += 1
+        if forgotten:
+            self._changed()
+        return forgotten
+
     def replace(self, facts: Iterable[Fact], values: Mapping[Fact, float] | None = None) -> None:
         """Believe exactly ``facts``; numeric values are replaced when ``values`` is
         given or ``facts`` carries them, else kept."""

@@ -29,6 +29,7 @@ from typing import TYPE_CHECKING, Any
 import smach
 from plan_bridge.errors import PlanBridgeError
 from plan_bridge.execution.simulation import SimulatedWorld, symbolic_skills
+from plan_bridge.execution.timed_world import TimedWorld, timed_skills
 from plan_bridge.pddl.task import PlanningTask, load_task
 from plan_bridge.skills.registry import SkillRegistry
 
@@ -88,10 +89,16 @@ class Target:
     task: PlanningTask
     folder: Path | None = None
     module: ModuleType | None = None
+    given_goal: str | None = None
+    """The goal given at run time (``--goal``) in place of the problem file's, on one
+    line (see :mod:`~plan_bridge.missions.given_goal`); None: the file's own."""
 
     @property
     def problem_label(self) -> str:
-        """What a run's header says it plans: ``problem p01.pddl``."""
+        """What a run's header says it plans: ``problem p01.pddl`` (``, goal (...)``
+        with a goal given at run time)."""
+        if self.given_goal is not None:
+            return f"problem {self.problem_path.name}, goal {self.given_goal}"
         return f"problem {self.problem_path.name}"
 
     @property
@@ -136,6 +143,11 @@ class Target:
     def _domain_setup(self, *, seed: int, fail_rate: float, variant: str) -> MissionSetup:
         factory = getattr(self.module, "setup", None) if self.module is not None else None
         if factory is None:
+            if _has_durative_actions(self.task):
+                # Durative actions take their time: a symbolic step's at-start effects
+                # hold while it runs (required concurrency: a lamp lit during a photo).
+                timed = TimedWorld(self.task, seed=seed, fail_rate=fail_rate, variant=variant)
+                return MissionSetup(skills=timed_skills(timed), world=timed)
             world = SimulatedWorld(self.task, seed=seed, fail_rate=fail_rate, variant=variant)
             return MissionSetup(skills=symbolic_skills(world), world=world)
         options: dict[str, Any] = {"seed": seed, "fail_rate": fail_rate}
@@ -157,6 +169,12 @@ class Target:
         return result
 
 
+def _has_durative_actions(task: PlanningTask) -> bool:
+    from plan_bridge.planning.engines import problem_kind
+
+    return problem_kind(task).temporal
+
+
 def load_target(
     target: str | Path,
     problem: str | Path | None = None,
@@ -169,7 +187,8 @@ def load_target(
     """Load a domain folder or a domain.pddl (then ``problem`` is required), or a
     pyrobosim world (``WORLD.yaml`` or a folder with ``world.yaml``: ``goal``, or a
     goal of its goals.yaml named by ``problem``; ``events``: an events file; see
-    :mod:`plan_bridge.missions.world_target`).
+    :mod:`plan_bridge.missions.world_target`). For a PDDL target, ``goal`` replaces
+    the problem's goal (see :mod:`plan_bridge.missions.given_goal`).
 
     ``prime`` (a planner worker pool that parses the task in parallel) and
     ``before_parse`` are those of :func:`~plan_bridge.pddl.task.load_task`.
@@ -190,10 +209,10 @@ def load_target(
             prime=prime,
             before_parse=before_parse,
         )
-    if goal is not None or events is not None:
+    if events is not None:
         raise TargetError(
-            f"{path}: --goal and --events are for pyrobosim worlds (WORLD.yaml, or a folder with "
-            f"world.yaml); a PDDL target's goal is in its problem file"
+            f"{path}: --events is for pyrobosim worlds (WORLD.yaml, or a folder with "
+            f"world.yaml); a PDDL target's world changes only by its actions"
         )
     if not path.exists():
         raise TargetError(
@@ -211,14 +230,33 @@ def load_target(
             problem_path = problems[0]
         else:
             problem_path = _problem_path(Path(problem), path)
-        task = load_task(domain, problem_path, prime=prime, before_parse=before_parse)
-        return Target(path.name, domain, problem_path, task, path, load_domain_module(path))
+        task, given = _load_task(domain, problem_path, goal, prime, before_parse)
+        module = load_domain_module(path)
+        name = path.name or path.resolve().name  # `plan-bridge run .`: the folder's name
+        return Target(name, domain, problem_path, task, path, module, given_goal=given)
     if problem is None:
         raise TargetError(f"{path}: a bare domain file needs --problem PROBLEM.pddl")
     problem_path = Path(problem)
-    task = load_task(path, problem_path, prime=prime, before_parse=before_parse)
-    name = path.parent.name if path.stem == "domain" and path.parent.name else path.stem
-    return Target(name, path, problem_path, task)
+    task, given = _load_task(path, problem_path, goal, prime, before_parse)
+    folder_name = path.resolve().parent.name  # of `domain.pddl`, `./domain.pddl`, `../domain.pddl`
+    name = folder_name if path.stem == "domain" and folder_name else path.stem
+    return Target(name, path, problem_path, task, given_goal=given)
+
+
+def _load_task(
+    domain: Path,
+    problem: Path,
+    goal: str | None,
+    prime: WorkerPool | None,
+    before_parse: Callable[[], object] | None,
+) -> tuple[PlanningTask, str | None]:
+    """The task of a PDDL target, with ``goal`` (one line) in place of the file's."""
+    if goal is None:
+        return load_task(domain, problem, prime=prime, before_parse=before_parse), None
+    from plan_bridge.missions.given_goal import load_task_with_goal
+
+    task, given = load_task_with_goal(domain, problem, goal, prime=prime, before_parse=before_parse)
+    return task, given.goal
 
 
 def _problem_path(problem: Path, folder: Path) -> Path:

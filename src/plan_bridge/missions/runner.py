@@ -31,6 +31,7 @@ if TYPE_CHECKING:  # (imported lazily: the CLI reads DEFAULT_FAIL_RATE at start-
     from plan_bridge.execution.temporal import TimelineRecorder
     from plan_bridge.execution.world import World
     from plan_bridge.missions.mission import MissionSetup, Target
+    from plan_bridge.pddl.knowledge import KnowledgeBase
     from plan_bridge.planning.planner import Planner
     from smach.introspection.journal import Journal
 
@@ -115,6 +116,18 @@ class Mission:
             world.restore(checkpoint["world"])
             world.abandon_running()  # steps in progress stopped with the process
         self.executive.resume_from(checkpoint["state"])
+
+    def attach_knowledge(self, knowledge: KnowledgeBase | None = None) -> KnowledgeBase:
+        """Let the mission follow a knowledge base (by default a new one holding the
+        target's problem): its facts are the belief, a change of its objects or goal
+        replans (``Executive.attach_knowledge``; serve it over ROS 2 with
+        ``RobotConnection.serve_knowledge``). Returns it."""
+        from plan_bridge.pddl.knowledge import KnowledgeBase
+
+        if knowledge is None:
+            knowledge = KnowledgeBase.from_task(self.executive.task)
+        self.executive.attach_knowledge(knowledge)
+        return knowledge
 
     def on_close(self, close: Callable[[], None]) -> None:
         """Call ``close`` when the run ends (before the journal's last record)."""

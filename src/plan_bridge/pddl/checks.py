@@ -6,10 +6,13 @@ predicate or function declared, arity, variables in scope, objects and constants
 declared, argument types. Each construct met is classified
 (:mod:`~plan_bridge.pddl.features`): unsupported ones are errors naming the feature;
 features used without their ``:requirements`` flag are warnings naming the flag and
-the line of first use.
+the line of first use. Durations below zero are errors (zero is a warning);
+``total-time`` is the makespan in ``(:metric minimize (total-time))`` and unsupported
+elsewhere. The walk records where numeric fluents are read
+(:class:`Read`) for :mod:`~plan_bridge.pddl.initial_values`.
 
-(A little over 600 lines: the domain's and the problem's checks share the formula
-walk and its private context; split, they would have to export both.)
+(Over 600 lines: the domain's and the problem's checks share the formula walk and
+its private context; split, they would have to export both.)
 """
 
 from __future__ import annotations
@@ -21,10 +24,10 @@ from dataclasses import dataclass, field
 from plan_bridge.pddl.diagnostics import Diagnostics
 from plan_bridge.pddl.features import IMPLIED, classify
 from plan_bridge.pddl.model import DomainModel, Entry, ProblemModel, Signature, typed_list
-from plan_bridge.pddl.sexpr import Atom, Form, Node
+from plan_bridge.pddl.sexpr import Atom, Form, Node, walk
 from plan_bridge.pddl.source import SourceText
 
-__all__ = ["Usage", "check_domain", "check_problem", "check_requirements"]
+__all__ = ["Read", "Usage", "check_domain", "check_problem", "check_requirements"]
 
 _COMPARISONS = frozenset(["<", ">", "<=", ">="])
 _NUMERIC_EFFECTS = frozenset(["increase", "decrease", "assign", "scale-up", "scale-down"])
@@ -32,11 +35,27 @@ _ARITHMETIC = frozenset(["+", "-", "*", "/"])
 _CONTINGENT = frozenset(["oneof", "unknown", "probabilistic", "preference"])
 
 
+@dataclass(frozen=True)
+class Read:
+    """A numeric fluent read by a condition, effect, duration or goal."""
+
+    args: tuple[Node, ...]
+    scope: Mapping[str, str]
+    source: SourceText
+    offset: int
+    reader: str
+    guards: tuple[Form, ...] = ()
+    """The reading action's static preconditions and inequalities: the instances
+    they rule out are never read (a distance between places no road joins)."""
+
+
 @dataclass
 class Usage:
-    """Requirement flag -> (source, offset) of its first use."""
+    """Requirement flag -> (source, offset) of its first use; numeric fluents read."""
 
     first: dict[str, tuple[SourceText, int]] = field(default_factory=dict)
+    reads: dict[str, list[Read]] = field(default_factory=dict)
+    """Function name -> where conditions, effects, durations and the goal read it."""
 
     def note(self, flag: str, source: SourceText, offset: int) -> None:
         self.first.setdefault(flag, (source, offset))
@@ -52,6 +71,13 @@ class _Context:
     """Objects and constants that may appear as arguments."""
     durative: bool = False
     where: str = ""
+    reader: str = ""
+    """What reads numeric fluents here, for messages: ``the precondition of move``."""
+    guards: tuple[Form, ...] = ()
+    in_forall_effect: bool = False
+
+
+_PART_NAMES = {":precondition": "precondition", ":condition": "condition", ":effect": "effect"}
 
 
 def _suggest(word: str, choices: Iterable[str]) -> str:
@@ -93,6 +119,7 @@ def check_domain(domain: DomainModel, diags: Diagnostics, usage: Usage) -> None:
                 _clash(
                     source, diags, "action", action.offset, kind, declared[action.name], action.name
                 )
+    static = _static_predicates(domain)
     for action in domain.actions:
         ctx = _Context(
             domain,
@@ -102,13 +129,24 @@ def check_domain(domain: DomainModel, diags: Diagnostics, usage: Usage) -> None:
             domain.constants,
             durative=action.kind == ":durative-action",
             where=f"({action.kind} {action.name} ...)",
+            guards=_guards(action.parts, static),
         )
         if ctx.durative:
             usage.note(":durative-actions", source, action.offset)
         scope = {p.name: p.type for p in action.params}
+        free = action.parts.get(":vars")
+        if free is not None and isinstance(free[1], Form):
+            # PDDL 1.2's free variables: named unsupported, and in scope (so their
+            # uses are not reported as undeclared too).
+            _unsupported(ctx, ":vars", free[0].offset)
+            variables, _ = typed_list(
+                free[1].items, source, diags, f":vars of {action.name}", variables=True
+            )
+            scope.update({v.name: v.type for v in variables})
         for keyword, (word, value) in action.parts.items():
-            if value is None or keyword == ":parameters":
+            if value is None or keyword in (":parameters", ":vars"):
                 continue
+            ctx.reader = f"the {_PART_NAMES.get(keyword, keyword[1:])} of {action.name}"
             if keyword == ":observe":
                 _unsupported(ctx, ":observe", word.offset)
             elif keyword == ":precondition":
@@ -122,6 +160,40 @@ def check_domain(domain: DomainModel, diags: Diagnostics, usage: Usage) -> None:
     for head, form in domain.sections:
         if head in (":derived", ":process", ":event", ":task", ":method", ":constraints"):
             _unsupported_section(source, diags, head, form)
+
+
+def _static_predicates(domain: DomainModel) -> frozenset[str]:
+    """Predicates no action's effect changes."""
+    changed: set[str] = set()
+    for action in domain.actions:
+        effect = action.parts.get(":effect")
+        if effect is not None and effect[1] is not None:
+            changed.update(node.head for node in walk(effect[1]) if isinstance(node, Form))
+    return frozenset(domain.predicates) - changed
+
+
+def _is_equality(node: Node | None) -> bool:
+    return isinstance(node, Form) and node.head == "=" and len(node.items) == 3
+
+
+def _guards(
+    parts: Mapping[str, tuple[Atom, Node | None]], static: frozenset[str]
+) -> tuple[Form, ...]:
+    """The static atoms and ``(not (= A B))`` of a precondition's conjunction."""
+    found: list[Form] = []
+    pending = [parts[key][1] for key in (":precondition", ":condition") if key in parts]
+    while pending:
+        node = pending.pop()
+        if not isinstance(node, Form) or not node.items:
+            continue
+        items = node.items
+        if node.head == "and":
+            pending.extend(items[1:])
+        elif node.head in ("at", "over") and len(items) == 3 and isinstance(items[1], Atom):
+            pending.append(items[2])
+        elif node.head in static or (node.head == "not" and _is_equality(items[-1])):
+            found.append(node)
+    return tuple(found)
 
 
 def _typed_entries(domain: DomainModel) -> Iterable[Entry]:
@@ -234,6 +306,9 @@ def _formula(ctx: _Context, node: Node, scope: Mapping[str, str], mode: str) -> 
             ctx.diags.error(ctx.source, node.offset, f"({head} (?x - type ...) FORMULA) expected")
             return
         if mode == "eff":
+            if head == "forall" and ctx.in_forall_effect:
+                _unsupported(ctx, "nested-forall-effect", node.offset)
+                return
             ctx.usage.note(":conditional-effects", ctx.source, node.offset)
         else:
             ctx.usage.note(
@@ -245,7 +320,10 @@ def _formula(ctx: _Context, node: Node, scope: Mapping[str, str], mode: str) -> 
             args[0].items, ctx.source, ctx.diags, f"variables of ({head} ...)", variables=True
         )
         _check_types(ctx, variables)
+        outer = ctx.in_forall_effect
+        ctx.in_forall_effect = outer or (mode == "eff" and head == "forall")
         _formula(ctx, args[1], {**scope, **{v.name: v.type for v in variables}}, mode)
+        ctx.in_forall_effect = outer
     elif head == "when" and mode == "eff":
         ctx.usage.note(":conditional-effects", ctx.source, node.offset)
         if len(args) != 2:
@@ -269,7 +347,11 @@ def _formula(ctx: _Context, node: Node, scope: Mapping[str, str], mode: str) -> 
         target = args[0]
         cost = isinstance(target, Form) and target.head == "total-cost"
         ctx.usage.note(":action-costs" if cost else ":numeric-fluents", ctx.source, node.offset)
+        reader = ctx.reader
+        if head == "assign":
+            ctx.reader = ""  # the target is written, not read
         _numeric(ctx, target, scope, note=not cost)
+        ctx.reader = reader
         _numeric(ctx, args[1], scope, note=not cost)
     else:
         _atom(ctx, node, scope)
@@ -328,6 +410,10 @@ def _numeric(ctx: _Context, node: Node, scope: Mapping[str, str], *, note: bool 
     if head in ctx.domain.functions or head == "total-cost":
         if head != "total-cost" and note:
             ctx.usage.note(":numeric-fluents", ctx.source, node.offset)
+        if ctx.reader and head in ctx.domain.functions:
+            ctx.usage.reads.setdefault(head, []).append(
+                Read(tuple(node.items[1:]), scope, ctx.source, node.offset, ctx.reader, ctx.guards)
+            )
         _atom(ctx, node, scope, numeric=True)
         return
     if head in ctx.domain.predicates:
@@ -368,6 +454,56 @@ def _duration(ctx: _Context, node: Node, scope: Mapping[str, str]) -> None:
         ctx.usage.note(":duration-inequalities", ctx.source, node.offset)
     for arg in node.items[1:]:
         _numeric(ctx, arg, scope)
+    bound, value = node.items[1], _constant(node.items[2])
+    if not (isinstance(bound, Atom) and bound.text == "?duration") or value is None:
+        return
+    shown = f"{value:g}"
+    impossible = value < 0 if node.head in ("=", "<=") else node.head == "<" and value <= 0
+    if impossible:
+        ctx.diags.error(
+            ctx.source,
+            node.items[2].offset,
+            f"a duration of {shown} in {ctx.where}: a durative action cannot take negative time"
+            if node.head == "="
+            else f"no duration satisfies ({node.head} ?duration {shown}) in {ctx.where}: "
+            "a durative action cannot take negative time",
+            "give a positive duration, e.g. (= ?duration 2)",
+        )
+    elif node.head == "=" and value == 0:
+        ctx.diags.warning(
+            ctx.source,
+            node.items[2].offset,
+            f"a duration of 0 in {ctx.where}: its start and end effects happen at the same instant",
+            "accepted: PDDL 2.1 allows it (IPC 2004's UMTS domain has such actions) and "
+            "TAMER and Kairos plan it; if the action takes no time, an (:action ...) says "
+            "so plainly, and if it does, give its duration",
+        )
+
+
+def _constant(node: Node) -> float | None:
+    """The value of a numeric expression made of numbers only (``-2``, ``(- 2)``)."""
+    if isinstance(node, Atom):
+        try:
+            return float(node.text)
+        except ValueError:
+            return None
+    values = [_constant(arg) for arg in node.items[1:]]
+    numbers = [v for v in values if v is not None]
+    if node.head not in _ARITHMETIC or not numbers or len(numbers) != len(values):
+        return None
+    first, rest = numbers[0], numbers[1:]
+    if node.head == "-":
+        return first - sum(rest) if rest else -first
+    if node.head == "+":
+        return sum(numbers)
+    if node.head == "*":
+        product = 1.0
+        for number in numbers:
+            product *= number
+        return product
+    if len(rest) != 1 or rest[0] == 0:
+        return None
+    return first / rest[0]
 
 
 def _atom(ctx: _Context, node: Form, scope: Mapping[str, str], *, numeric: bool = False) -> None:
@@ -511,12 +647,25 @@ def check_problem(
     names: dict[str, Entry] = dict(domain.constants)
     for name, entry in problem.objects.items():
         if name in domain.constants:
-            line, column = domain.source.line_col(domain.constants[name].offset)
-            diags.error(
+            # Other planners take it (one object); UP 1.3 refuses a name declared
+            # twice, so the front end leaves this declaration out of what UP reads.
+            constant = domain.constants[name]
+            line = domain.source.line_col(constant.offset)[0]
+            types = (
+                f" (typed {entry.type!r} here, {constant.type!r} in the domain: the "
+                "domain's type counts)"
+                if entry.type != constant.type
+                else ""
+            )
+            diags.warning(
                 source,
                 entry.offset,
-                f"object {name!r} is already a constant of the domain (at {domain.source.path}:{line}:{column})",
-                "remove it from (:objects ...)",
+                f"object {name!r} (line {source.line_col(entry.offset)[0]}) is already a "
+                f"constant of the domain ({domain.source.path}:{line}){types}; it is the "
+                "same object, declared twice",
+                "unified-planning 1.3 refuses a name declared twice, so plan_bridge leaves "
+                "this declaration out of what it reads; remove it from (:objects ...) to "
+                "silence this warning",
             )
             continue
         for kind, table in (("predicate", domain.predicates), ("function", domain.functions)):
@@ -550,7 +699,9 @@ def check_problem(
             _init_fact(ctx, fact)
     if problem.goal is not None and len(problem.goal.items) == 2:
         ctx.where = "(:goal ...)"
+        ctx.reader = "the goal"
         _formula(ctx, problem.goal.items[1], {}, "pre")
+        ctx.reader = ""
         if _empty_conjunction(problem.goal.items[1]):
             diags.warning(
                 source,
@@ -574,10 +725,36 @@ def check_problem(
                 "expected (:metric minimize EXPRESSION) or (:metric maximize EXPRESSION)",
             )
         else:
-            _numeric(ctx, items[1], {}, note=False)
+            _metric(ctx, items[0].text, items[1])
     for head, form in problem.sections:
         if head in (":htn", ":constraints"):
             _unsupported_section(source, diags, head, form)
+
+
+def _metric(ctx: _Context, direction: str, expression: Node) -> None:
+    """PDDL 2.1 defines ``total-time`` (the makespan) for every metric; unified-planning
+    1.3 reads it as ``(:metric minimize (total-time))`` only, so it is unsupported
+    elsewhere in a metric (a domain's own function ``total-time`` is a function)."""
+    if "total-time" in ctx.domain.functions:
+        _numeric(ctx, expression, {}, note=False)
+        return
+    makespan = (  # `total-time` alone is read as `(total-time)` (front_end rewrites it)
+        isinstance(expression, Form)
+        and expression.head == "total-time"
+        and len(expression.items) == 1
+    ) or (isinstance(expression, Atom) and expression.text == "total-time")
+    if makespan and direction == "minimize":
+        return
+    uses = [
+        node
+        for node in walk(expression)
+        if (isinstance(node, Form) and node.head == "total-time")
+        or (isinstance(node, Atom) and node.text == "total-time")
+    ]
+    if uses:
+        _unsupported(ctx, "total-time", uses[0].offset)
+        return
+    _numeric(ctx, expression, {}, note=False)
 
 
 def _empty_conjunction(node: Node) -> bool:

@@ -155,6 +155,22 @@ _REQUIREMENTS = [
     ),
     _u(":method-preconditions", "HTN method preconditions", "plan_bridge does not plan HTN"),
     _u(":multi-agent", "multi-agent planning", "plan_bridge plans for one agent"),
+    # PDDL 1.2 flags of the first IPC, read by no engine of unified-planning 1.3.
+    _u(":domain-axioms", "PDDL 1.2 domain axioms", _UP_READER),
+    _u(":safety-constraints", "PDDL 1.2 safety constraints", _UP_READER),
+    _u(":expression-evaluation", "PDDL 1.2 expression evaluation", _UP_READER),
+    _u(":open-world", "PDDL 1.2 open-world semantics", _UP_READER),
+    _u(":true-negation", "PDDL 1.2 true negation", _UP_READER),
+    _u(":ucpop", "PDDL 1.2 :adl with axioms and safety constraints", _UP_READER),
+    _u(":subgoal-through-axioms", "PDDL 1.2 subgoals through axioms", _UP_READER),
+    _u(":action-expansions", "PDDL 1.2 action expansions", _UP_READER),
+    _u(":foreach-expansions", "PDDL 1.2 foreach expansions", _UP_READER),
+    _u(":dag-expansions", "PDDL 1.2 expansions as graphs", _UP_READER),
+    _u(
+        ":goal-utilities",
+        "net-benefit goal utilities (PDDL 3.1, IPC 2008)",
+        "no installed or known engine plans them",
+    ),
 ]
 _CONSTRUCTS = [  # not requirement flags
     _u("either", "a union of types", _UP_READER),
@@ -170,6 +186,24 @@ _CONSTRUCTS = [  # not requirement flags
     _u(":method", "an HTN method", "plan_bridge does not plan HTN"),
     _u(":htn", "an HTN initial task network", "plan_bridge does not plan HTN"),
     _u("preference", "a PDDL3 preference", "no installed or known engine plans them"),
+    _u(
+        ":vars",
+        "PDDL 1.2 free variables of an action",
+        _UP_READER + "; declare them in :parameters instead",
+    ),
+    _u(
+        "total-time",
+        "the makespan inside a metric expression",
+        "the unified-planning 1.3 PDDL reader reads total-time only as "
+        "(:metric minimize (total-time)); write that, or leave the metric out to plan "
+        "without it",
+    ),
+    _u(
+        "nested-forall-effect",
+        "a forall effect inside another forall effect",
+        "the unified-planning 1.3 PDDL reader cannot represent it; one forall over "
+        "all the variables does the same",
+    ),
     _e(":durative-action", "a durative action", _TEMPORAL),
     _e("numeric", "numeric fluents and comparisons", _NUMERIC),
 ]

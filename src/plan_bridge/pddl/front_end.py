@@ -23,6 +23,7 @@ from plan_bridge.errors import PddlError, UnsupportedFeatureError
 from plan_bridge.pddl.checks import Usage, check_domain, check_problem, check_requirements
 from plan_bridge.pddl.diagnostics import Diagnostic, Diagnostics
 from plan_bridge.pddl.features import ENGINES, classify
+from plan_bridge.pddl.initial_values import check_initial_values
 from plan_bridge.pddl.model import DomainModel, ProblemModel, read_domain, read_problem
 from plan_bridge.pddl.rewrite import DOMAIN_ORDER, PROBLEM_ORDER, Edit, Rewritten, rewrite
 from plan_bridge.pddl.sexpr import Atom, Form, walk
@@ -119,12 +120,22 @@ def analyse(domain: SourceText, problem: SourceText) -> FrontEnd:
 def _analyse(domain: SourceText, problem: SourceText) -> FrontEnd:
     diags = Diagnostics()
     usage = Usage()
+    for source in (domain, problem):
+        if source.preamble is not None:
+            diags.warning(
+                source,
+                source.preamble[0],
+                "(in-package ...) before (define ...): a Lisp preamble of early PDDL "
+                "files, not PDDL; plan_bridge ignores it",
+                "unified-planning 1.3 would refuse it: it is left out of the text it reads",
+            )
     domain_model = read_domain(domain, diags)
     problem_model = read_problem(problem, diags)
     check_domain(domain_model, diags, usage)
     check_problem(domain_model, problem_model, diags, usage)
     missing = check_requirements(domain_model, problem_model, diags, usage)
     diags.raise_errors()
+    check_initial_values(domain_model, problem_model, diags, usage)
     front = FrontEnd(domain, problem, domain_model, problem_model, diags)
     for flag in missing:
         where = usage.first.get(flag)
@@ -140,6 +151,8 @@ def _prepare_for_up(front: FrontEnd) -> None:
     domain_edits: list[Edit] = []
     problem_edits: list[Edit] = []
     for model, edits in ((domain, domain_edits), (problem, problem_edits)):
+        if model.source.preamble is not None:
+            edits.append(Edit(*model.source.preamble, ""))
         for head, section in model.sections:
             if len(section.items) == 1 and head not in (":init", ":action", ":durative-action"):
                 edits.append(Edit(section.offset, section.end, ""))
@@ -175,6 +188,11 @@ def _prepare_for_up(front: FrontEnd) -> None:
     for action in domain.actions:
         domain_edits += _duration_substitution(action.parts, domain.source.text)
     domain_edits += _declare_object_type(domain, problem)
+    problem_edits += _drop_repeated_constants(domain, problem)
+    metric = problem.metric.items if problem.metric is not None else []
+    if len(metric) == 3 and isinstance(metric[2], Atom) and metric[2].text == "total-time":
+        # UP 1.3 reads the makespan only in parentheses (it fails on the bare word).
+        problem_edits.append(Edit(metric[2].offset, metric[2].end, "(total-time)"))
     front.domain_up = rewrite(
         domain.source.text,
         domain.tree,
@@ -212,6 +230,42 @@ def _declare_object_type(domain: DomainModel, problem: ProblemModel) -> list[Edi
     ):
         return []
     return [Edit(types.end - 1, types.end - 1, " object")]
+
+
+def _drop_repeated_constants(domain: DomainModel, problem: ProblemModel) -> list[Edit]:
+    """Objects that repeat a constant of the domain (a warning of the checks): UP 1.3
+    refuses a name declared twice, so they are left out of the text it reads (with
+    their ``- type`` when no other object of their group is left)."""
+    repeated = {e.offset for n, e in problem.objects.items() if n in domain.constants}
+    if not repeated:
+        return []
+    edits: list[Edit] = []
+    for head, section in problem.sections:
+        if head != ":objects":
+            continue
+        items = [item for item in section.items[1:] if isinstance(item, Atom)]
+        group: list[Atom] = []
+        index = 0
+        while index < len(items):
+            item = items[index]
+            if item.text == "-" and index + 1 < len(items):
+                edits += _drop_from_group(group, items[index + 1].end, repeated)
+                group = []
+                index += 2
+                continue
+            group.append(item)
+            index += 1
+        edits += _drop_from_group(group, None, repeated)
+    return edits
+
+
+def _drop_from_group(names: list[Atom], type_end: int | None, repeated: set[int]) -> list[Edit]:
+    """Edits dropping the repeated ones of ``names`` (typed by the ``- T`` ending at
+    ``type_end``): the whole ``a b - T`` when all of them are repeated."""
+    dropped = [name for name in names if name.offset in repeated]
+    if type_end is not None and dropped and len(dropped) == len(names):
+        return [Edit(names[0].offset, type_end, "")]
+    return [Edit(name.offset, name.end, "") for name in dropped]
 
 
 def _untyped_quantifier(tree: Form) -> bool:

@@ -94,8 +94,8 @@ class _Builder:
     def copy(self, start: int, end: int) -> None:
         position = start
         for edit in self.edits:
-            if edit.start < start or edit.end > end:
-                continue
+            if edit.start < max(start, position) or edit.end > end:
+                continue  # outside this range, or inside an edit made already
             self._piece(self.original[position : edit.start], position, True)
             self._piece(edit.replacement, edit.start, False)
             position = edit.end

@@ -41,7 +41,10 @@ __all__ = [
 DEFAULT_MAX_BYTES = 5_000_000
 DEFAULT_MAX_DEPTH = 200
 
-_TOKEN = re.compile(r";[^\n]*|\(|\)|[^\s();]+")
+#: A dash glued to the type after it (``?c -compressor``, as in some IPC files) is
+#: two tokens, ``-`` and ``compressor``: no PDDL name starts with ``-``, and a
+#: negative number has a digit after it.
+_TOKEN = re.compile(r";[^\n]*|\(|\)|-(?=[^\W\d_])|[^\s();]+")
 
 #: What to write instead of a section that belongs to the other kind of file.
 _MISPLACED_SECTION = {
@@ -129,6 +132,7 @@ class SourceText:
         self.kind = kind
         self._line_starts = [0] + [m.end() for m in re.finditer("\n", text)]
         self._tokens: list[Token] | None = None
+        self._preamble: tuple[int, int] | None = None
 
     # -- positions -------------------------------------------------------------
     def line_col(self, offset: int) -> tuple[int, int]:
@@ -188,8 +192,28 @@ class SourceText:
     def tokens(self) -> list[Token]:
         if self._tokens is None:
             with paused_gc():
-                self._tokens = self._tokenize()
+                self._tokens = self._without_preamble(self._tokenize())
         return self._tokens
+
+    @property
+    def preamble(self) -> tuple[int, int] | None:
+        """(start, end) of an ``(in-package ...)`` form before ``(define ...)``, which
+        the tokens leave out (a Lisp preamble of early PDDL files, IPC 1998)."""
+        _ = self.tokens
+        return self._preamble
+
+    def _without_preamble(self, tokens: list[Token]) -> list[Token]:
+        if len(tokens) < 4 or tokens[0].text != "(" or tokens[1].text != "in-package":
+            return tokens
+        for index in range(2, min(len(tokens), 8)):
+            if tokens[index].text == "(":
+                return tokens
+            if tokens[index].text == ")":
+                if index + 1 == len(tokens):
+                    return tokens
+                self._preamble = (tokens[0].offset, tokens[index].offset + 1)
+                return tokens[index + 1 :]
+        return tokens
 
     def _tokenize(self) -> list[Token]:
         lowered = self.text.lower()

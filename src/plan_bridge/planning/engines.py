@@ -9,7 +9,8 @@ A problem's *kind* is read from unified-planning's problem kind:
 * ``classical`` otherwise (STRIPS/ADL, action costs included).
 
 ``get_planner("auto")`` returns an :class:`AutoPlanner`: classical problems go to
-Fast Downward; temporal and numeric ones to the installed engines of that family,
+Fast Downward (then pyperplan, then the temporal engines, for what those refuse);
+temporal and numeric ones to the installed engines of that family,
 those that declare support for every feature first (Kairos, then TAMER, then
 ENHSP), then the others ("trying anyway": declarations are conservative). When an
 engine refuses the problem, fails or gives up without a proof, the next one is tried
@@ -105,7 +106,10 @@ def engines_for(task: PlanningTask) -> list[str]:
     kind = problem_kind(task)
     installed = set(installed_planners())
     if kind.classical:
-        family = [name for name in _CLASSICAL if name in installed]
+        # Then the temporal+numeric engines, which plan classical problems too: what
+        # the classical ones refuse (a makespan metric, a number set in :init that no
+        # action uses: Fast Downward's translator fails on both) still gets planned.
+        family = [name for name in (*_CLASSICAL, *_TEMPORAL) if name in installed]
     else:
         family = [name for name in _TEMPORAL if name in installed]
     if not family:

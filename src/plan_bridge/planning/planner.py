@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 from plan_bridge.errors import PlannerNotFoundError
+from plan_bridge.pddl.initial_values import NO_INITIAL_VALUE
 from plan_bridge.pddl.reachability import ReachabilityReport, relaxed_unreachable_goals
 from plan_bridge.pddl.task import Fact, FactLike, PlanningTask, format_fact
 from plan_bridge.pddl.up_runtime import ensure_unified_planning
@@ -564,7 +565,8 @@ class UPPlanner:
         engine_time_s: float = 0.0,
         log: str = "",
     ) -> PlanResult:
-        del task  # kept in the signature for subclasses that want to report on it
+        if status in (PlanStatus.UNSOLVABLE, PlanStatus.UNSUPPORTED, PlanStatus.ERROR):
+            explanation = _undefined_numbers_first(task, explanation)
         return PlanResult(
             status=status,
             actions=steps or [],
@@ -580,6 +582,17 @@ class UPPlanner:
 
 
 _cache_lock = threading.Lock()
+
+
+def _undefined_numbers_first(task: PlanningTask, explanation: str) -> str:
+    """A numeric fluent that is read but has no initial value (the front end's warning)
+    is the likely cause of a failure: the reason names it before the engine's words
+    (which say "UNDEFINED_INITIAL_NUMERIC", or "no plan exists")."""
+    for warning in task.warnings:
+        first = warning.splitlines()[0] if warning else ""
+        if NO_INITIAL_VALUE in first:
+            return f"{first.split(': warning: ', 1)[-1]}; {explanation}"
+    return explanation
 
 
 def _unreachable(task: PlanningTask, timeout: float) -> ReachabilityReport:

@@ -20,7 +20,7 @@ import sys
 import threading
 import time
 from collections.abc import Sequence
-from typing import Any, TextIO
+from typing import TYPE_CHECKING, Any, TextIO
 
 import smach
 from plan_bridge.errors import PlanBridgeError
@@ -30,6 +30,10 @@ from plan_bridge.planning.planner import PlanStep
 from plan_bridge.ros.protocol import task_digest
 from plan_bridge.ros.skills import remote_info, ros_skills
 from plan_bridge.skills.registry import SkillRegistry
+
+if TYPE_CHECKING:
+    from plan_bridge.pddl.knowledge import KnowledgeBase
+    from plan_bridge.ros.knowledge_services import KnowledgeServices
 
 __all__ = ["RobotConnection", "RobotError", "RobotLost", "RobotWorld"]
 
@@ -105,6 +109,7 @@ class RobotConnection:
         self.node: Any = None
         self._ready = threading.Event()
         self._pump_thread: threading.Thread | None = None
+        self._knowledge_services: list[KnowledgeServices] = []
 
     # -- life cycle -------------------------------------------------------------------
     def open(self) -> RobotConnection:
@@ -180,8 +185,14 @@ class RobotConnection:
         """The robot node's target arguments: the same problem (or world and goal)."""
         arguments = [self._target_path()]
         goal = getattr(self.target, "goal_text", None)
-        if goal is None:  # a PDDL target: its problem file
-            return [*arguments, "--problem", str(self.target.problem_path)]
+        if goal is None:  # a PDDL target: its problem file (and the goal given at run time)
+            given = self.target.given_goal
+            return [
+                *arguments,
+                "--problem",
+                str(self.target.problem_path),
+                *(["--goal", given] if given is not None else []),
+            ]
         name = getattr(self.target, "goal_name", "")
         if name:  # a goal of goals.yaml: its name (shown by the robot) and its text
             arguments += ["--problem", name]
@@ -298,8 +309,25 @@ class RobotConnection:
         except RuntimeError:
             return None
 
+    def serve_knowledge(
+        self, knowledge: KnowledgeBase, *, name: str = "knowledge"
+    ) -> KnowledgeServices:
+        """Serve ``knowledge`` on the executive's node, PlanSys2-style
+        (:mod:`plan_bridge.ros.knowledge_services`: ``/NAME/add_problem_goal``, ...);
+        the services go in :meth:`close`."""
+        from plan_bridge.ros.knowledge_services import KnowledgeServices
+
+        if self.node is None:
+            raise RobotError("not connected: open() the connection before serving a knowledge base")
+        services = KnowledgeServices(self.node, knowledge, name=name)
+        self._knowledge_services.append(services)
+        return services
+
     def close(self) -> None:
         """Leave the ROS graph; stop the robot process if we started it."""
+        for services in self._knowledge_services:
+            services.close()
+        self._knowledge_services = []
         if self.context is not None:
             from smach.ros.executor import SmachExecutor
 

@@ -49,7 +49,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         "pyrobosim world folder, a goal of its goals.yaml",
     )
     parser.add_argument(
-        "--goal", help='pyrobosim world: the goal, e.g. "(At apple0 table0_tabletop)"'
+        "--goal",
+        help='the goal: of a pyrobosim world, e.g. "(At apple0 table0_tabletop)", or '
+        "replacing a PDDL problem's (as plan-bridge run --goal)",
     )
     parser.add_argument(
         "--events",

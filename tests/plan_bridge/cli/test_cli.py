@@ -28,6 +28,7 @@ def test_every_subcommand_is_in_the_table() -> None:
         "run",
         "check",
         "problem",
+        "import",
         "control",
         "plan",
         "skills",

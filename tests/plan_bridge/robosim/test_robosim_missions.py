@@ -69,13 +69,15 @@ def test_cli_problem_plan_check_and_run_on_a_world_file(
     assert figures["goal_reached"] and figures["sim_time_s"] > 0 and figures["distance_m"] > 0
 
 
-def test_cli_bad_goal_is_bad_input_and_goal_on_pddl_is_refused(
+def test_cli_bad_goal_is_bad_input_in_the_vocabulary_of_the_target(
     test_world_file: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     assert main(["plan", str(test_world_file), "--goal", "(At apple0 tabel0)"]) == 2
     assert "did you mean table0" in capsys.readouterr().err
+    # A PDDL target's --goal is checked against its domain and problem
+    # (tests/plan_bridge/cli/test_goal_option.py).
     assert main(["plan", "domains/fetch_drink", "--goal", "(At a b)"]) == 2
-    assert "--goal is for pyrobosim worlds" in capsys.readouterr().err
+    assert "--goal:1:5: undeclared object or constant 'a'" in capsys.readouterr().err
 
 
 def test_a_goal_the_world_blocks_is_refused_with_what_blocks_it(

@@ -1,8 +1,8 @@
-;; verdict: error
-;; message: object 'depot' is already a constant of the domain
+;; verdict: valid
 ;; pair: depot-constant-domain.pddl
-;; where: problem
-;; line: 11
+;; warning: object 'depot' (line 11) is already a constant of the domain
+;; warning-line: 11
+;; plan: 3
 (define (problem deliver-one)
   (:domain courier)
   (:objects

@@ -1,0 +1,15 @@
+; Inspect the far waypoints: the battery (25) does not last the tour (30), so the
+; robot recharges first.
+(define (problem patrol-far)
+  (:domain battery-patrol)
+  (:objects r1 -robot wpa wpb wpc -waypoint)
+  (:init (robot_at r1 charger)
+         (path charger wpa) (path wpa charger) (path wpa wpb) (path wpb wpa)
+         (path wpb wpc) (path wpc wpb)
+         (= (path_length charger wpa) 5) (= (path_length wpa charger) 5)
+         (= (path_length wpa wpb) 5) (= (path_length wpb wpa) 5)
+         (= (path_length wpb wpc) 5) (= (path_length wpc wpb) 5)
+         (= (speed r1) 2.5)
+         (= (battery r1) 25))
+  (:goal (and (inspected wpb) (inspected wpc)))
+  (:metric minimize (total-time)))

@@ -1,0 +1,6 @@
+(define (problem one-shot)
+  (:domain lamp-photo)
+  (:objects lamp1 - lamp hall - scene)
+  (:init (fresh lamp1) (camera-free))
+  (:goal (and (photographed hall)))
+  (:metric minimize (total-time)))
