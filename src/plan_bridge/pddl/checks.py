@@ -635,13 +635,15 @@ def check_problem(
             f"add (:domain {domain.name})",
         )
     elif domain.name and ref.text != domain.name:
+        # A warning: knowledge bases (ROSPlan's) write problems with a placeholder name,
+        # and unified-planning reads them; the front end passes the domain's name on.
         line, column = domain.source.line_col(domain.name_offset or 0)
-        diags.error(
+        diags.warning(
             source,
             ref.offset,
             f"this problem is for domain {ref.text!r}, but the domain file defines {domain.name!r} "
-            f"(at {domain.source.path}:{line}:{column})",
-            "pass the domain file this problem was written for, or correct the name",
+            f"(at {domain.source.path}:{line}:{column}); planning it with {domain.name!r} - "
+            "check that this is the domain file the problem was written for",
         )
     _check_types(_Context(domain, source, diags, usage, {}), problem.objects.values())
     names: dict[str, Entry] = dict(domain.constants)

@@ -189,6 +189,10 @@ def _prepare_for_up(front: FrontEnd) -> None:
         domain_edits += _duration_substitution(action.parts, domain.source.text)
     domain_edits += _declare_object_type(domain, problem)
     problem_edits += _drop_repeated_constants(domain, problem)
+    ref = problem.domain_ref
+    if ref is not None and domain.name and ref.text != domain.name:
+        # Another name in (:domain ...) is a warning (checks.py); planners get the domain's.
+        problem_edits.append(Edit(ref.offset, ref.offset + len(ref.text), domain.name))
     metric = problem.metric.items if problem.metric is not None else []
     if len(metric) == 3 and isinstance(metric[2], Atom) and metric[2].text == "total-time":
         # UP 1.3 reads the makespan only in parentheses (it fails on the bare word).

@@ -1,7 +1,7 @@
-;; verdict: error
-;; message: this problem is for domain 'curier'
-;; where: problem
-;; line: 6
+;; verdict: valid
+;; warning: this problem is for domain 'curier', but the domain file defines 'courier'
+;; warning-line: 6
+;; plan: 3
 (define (problem deliver-one)
   (:domain curier)
   (:objects
