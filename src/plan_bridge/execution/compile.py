@@ -18,6 +18,7 @@ import re
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import smach
 from plan_bridge.execution.clock import SimClock, Ticket, clock_of
@@ -312,36 +313,34 @@ def compile_plan(
     return CompiledPlan(sm, steps, labels, states, layers)
 
 
-class _TurnTakingLayer(smach.Concurrence):
-    """A layer of steps on a simulated world's clock: they run at once and take turns
-    on the clock (one at a time, in simulated-time order, ties broken by step index;
-    see :mod:`plan_bridge.execution.clock`), so what one robot's step changes in the
-    world or the belief reaches the other's in one order, run after run."""
+class TurnTakingConcurrence(smach.Concurrence):
+    """A Concurrence whose children take turns on a simulated clock
+    (:mod:`plan_bridge.execution.clock`): they run at once, but one at a time, the one
+    due first in simulated time next (ties: by ``keys``, by default the order the
+    children were added). Every child's place in the order is taken before any of them
+    starts; run by a thread that takes turns on the clock already, the children run as
+    in a plain Concurrence. The other arguments are :class:`smach.Concurrence`'s."""
 
     def __init__(
         self,
         clock: SimClock,
-        keys: Mapping[str, int],
-        input_keys: Sequence[str],
-        output_keys: Sequence[str],
+        outcomes: Sequence[str],
+        default_outcome: str | None = None,
+        *,
+        keys: Mapping[str, int] | None = None,
+        **options: Any,
     ) -> None:
-        super().__init__(
-            outcomes=list(STEP_OUTCOMES),
-            default_outcome="succeeded",
-            outcome_cb=_layer_outcome,
-            input_keys=input_keys,
-            output_keys=output_keys,
-        )
+        super().__init__(outcomes, default_outcome, **options)
         self.clock = clock
-        self.keys = dict(keys)
+        self.keys = None if keys is None else dict(keys)
         self._tickets: dict[str, Ticket] = {}
 
     def _run(self) -> str | None:
         clock = self.clock
         if clock.taking_part():  # run by a thread that takes turns already: as it is
             return super()._run()
-        # Every step's place in the order is taken before any of them starts.
-        self._tickets = {label: clock.admit(key) for label, key in self.keys.items()}
+        keys = self.keys or {label: n for n, label in enumerate(self.get_children())}
+        self._tickets = {label: clock.admit(key) for label, key in keys.items()}
         try:
             return super()._run()
         finally:
@@ -356,6 +355,30 @@ class _TurnTakingLayer(smach.Concurrence):
             return
         with self.clock.turn(ticket):
             super()._run_child(run, child)
+
+
+class _TurnTakingLayer(TurnTakingConcurrence):
+    """A layer of steps on a simulated world's clock: they run at once and take turns
+    on the clock (one at a time, in simulated-time order, ties broken by step index;
+    see :mod:`plan_bridge.execution.clock`), so what one robot's step changes in the
+    world or the belief reaches the other's in one order, run after run."""
+
+    def __init__(
+        self,
+        clock: SimClock,
+        keys: Mapping[str, int],
+        input_keys: Sequence[str],
+        output_keys: Sequence[str],
+    ) -> None:
+        super().__init__(
+            clock,
+            list(STEP_OUTCOMES),
+            "succeeded",
+            keys=keys,
+            outcome_cb=_layer_outcome,
+            input_keys=input_keys,
+            output_keys=output_keys,
+        )
 
 
 def _layer_outcome(outcomes: dict[str, str | None]) -> str:

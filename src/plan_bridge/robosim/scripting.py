@@ -30,6 +30,7 @@ from collections.abc import Iterable
 from typing import Any
 
 import smach
+from plan_bridge.execution.compile import TurnTakingConcurrence as ClockConcurrence
 from plan_bridge.robosim.skills import skill_for
 from plan_bridge.robosim.world import RobosimWorld
 
@@ -340,17 +341,13 @@ def go_to(
     return sm
 
 
-class TurnTakingConcurrence(smach.Concurrence):
+class TurnTakingConcurrence(ClockConcurrence):
     """A Concurrence whose children (one machine per robot, say) take turns on the
     world's simulated clock, as the steps of a planned mission do
-    (:mod:`plan_bridge.execution.clock`): they run at once, but one at a time, the one
-    whose simulated time is earliest next (ties: the one added first). The world's time
-    is then the latest child's timeline, not the sum of theirs, what one robot changes
-    reaches the other in one order, and a seeded run repeats exactly.
-
-    Every child's place in the order is taken before any of them starts. Run by a
-    thread that takes turns on the clock already, the children run as in a plain
-    Concurrence. The other arguments are :class:`smach.Concurrence`'s.
+    (:class:`plan_bridge.execution.compile.TurnTakingConcurrence` on ``world.clock``).
+    The world's time is then the latest child's timeline, not the sum of theirs, what
+    one robot changes reaches the other in one order, and a seeded run repeats exactly.
+    The other arguments are :class:`smach.Concurrence`'s.
     """
 
     def __init__(
@@ -360,27 +357,5 @@ class TurnTakingConcurrence(smach.Concurrence):
         default_outcome: str | None = None,
         **options: Any,
     ) -> None:
-        super().__init__(outcomes, default_outcome, **options)
+        super().__init__(world.clock, list(outcomes), default_outcome, **options)
         self.world = world
-        self._tickets: dict[str, Any] = {}
-
-    def _run(self) -> str | None:
-        clock = self.world.clock
-        if clock.taking_part():
-            return super()._run()
-        labels = list(self.get_children())
-        self._tickets = {label: clock.admit(key) for key, label in enumerate(labels)}
-        try:
-            return super()._run()
-        finally:
-            tickets, self._tickets = self._tickets, {}
-            for ticket in tickets.values():
-                clock.discard(ticket)
-
-    def _run_child(self, run: Any, child: Any) -> None:
-        ticket = self._tickets.get(child.label)
-        if ticket is None:
-            super()._run_child(run, child)
-            return
-        with self.world.clock.turn(ticket):
-            super()._run_child(run, child)
