@@ -6,12 +6,16 @@ Usage::
     .venv/bin/python benchmarks/control_bench.py --quick          # a few seconds
     .venv/bin/python benchmarks/control_bench.py --before REV     # compare with REV
 
-On an unobserved step, the hook is the test ``if observed and control is not None``
-after a state returns (smach/state_machine.py; a controller makes its tree observed,
-so ``bus.control`` is read only on observed steps). To measure it, the working
-tree's ``StateMachine`` is loaded twice into this process: as it is, and with that
-test replaced by ``False`` (which Python compiles away, leaving the machine as if
-the hook were never written); ``--before REV`` loads the file of a commit instead.
+The hook is in ``Container.step_child``, which a step reaches only when somebody
+watches it (a controller subscribes to the tree, so a controlled tree is watched). On
+an unwatched step, what remains of it is the test
+``if watched or log_steps or self._preempt_requested`` in
+``StateMachine.run_children`` (smach/state_machine.py) that decides whether a step
+goes through ``step_child``. To measure that, the working tree's ``StateMachine`` is
+loaded twice into this process: as it is, and with that test replaced by ``False``
+(which Python compiles away, leaving a machine that can never be watched: an upper
+bound on what the hook costs an unwatched step); ``--before REV`` loads the file of a
+commit instead.
 The same 1000-state chain of trivial states (the ``chain`` scenario of
 core_bench.py) is built with each. Trials alternate between the two
 (round-robin, gc disabled while timing) so that drift of a shared machine hits
@@ -37,7 +41,7 @@ import smach
 from smach.control import Controller
 
 ROOT = Path(__file__).resolve().parents[1]
-HOOK_TEST = "observed and control is not None"
+HOOK_TEST = "watched or log_steps or self._preempt_requested"
 
 
 class Trivial(smach.State):

@@ -61,7 +61,7 @@ import threading
 import time
 import timeit
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -150,6 +150,8 @@ class Config:
     peer_py_trees: int
     peer_transitions: int
     compare_trials: int  # rounds per logging configuration against the original
+    only: tuple[str, ...] = ()  # --only: just these same-run comparison scenarios
+    cpu_time: bool = False  # --cpu-time: the comparison's single-threaded trials in CPU time
 
 
 FULL = Config(
@@ -189,6 +191,11 @@ class Bench:
     that a slow phase of the machine (CPU frequency, other processes) hits them alike.
     """
 
+    #: The clock of a trial: wall time, or (``--cpu-time``, single-threaded scenarios of
+    #: the comparison) the running thread's CPU time, which time spent descheduled by
+    #: other processes on a loaded machine does not count.
+    clock: Callable[[], int] = staticmethod(time.perf_counter_ns)
+
     def __init__(self, name: str, what: str, fn: Callable[[], object], units: int) -> None:
         self.name = name
         self.what = what
@@ -209,11 +216,12 @@ class Bench:
         fn = self.fn
         gc.collect()
         gc.disable()
+        clock = self.clock
         try:
-            start = time.perf_counter_ns()
+            start = clock()
             for _ in range(self.reps):
                 fn()
-            elapsed = time.perf_counter_ns() - start
+            elapsed = clock() - start
         finally:
             gc.enable()
         return elapsed / 1000.0 / (self.reps * self.units)
@@ -833,8 +841,26 @@ def main(argv: list[str] | None = None) -> int:
         metavar="URL",
         help="clone the original SMACH from URL into a temporary directory and measure it",
     )
+    parser.add_argument(
+        "--only",
+        metavar="NAMES",
+        help="with --original: only the same-run comparison, of these scenarios "
+        "(comma-separated, e.g. nested,nested_key,chain)",
+    )
+    parser.add_argument(
+        "--cpu-time",
+        action="store_true",
+        help="time the comparison's single-threaded scenarios in thread CPU time (robust "
+        "on a loaded machine: time spent descheduled is not counted)",
+    )
     args = parser.parse_args(argv)
     cfg = QUICK if args.quick else FULL
+    if args.cpu_time:
+        cfg = replace(cfg, cpu_time=True)
+    if args.only:
+        if not (args.original or args.original_git):
+            parser.error("--only compares with the original: give --original or --original-git")
+        cfg = replace(cfg, only=tuple(args.only.split(",")))
     with tempfile.TemporaryDirectory(prefix="core_bench-") as tmp:
         original_dir = args.original
         if args.original_git:
@@ -863,7 +889,13 @@ def measure(args: argparse.Namespace, cfg: Config, original: Any) -> int:
         )
     started = time.perf_counter()
     try:
-        results = run_all(cfg)
+        # (--only: the bare-call trial alone, for the machine's slowdown)
+        if cfg.only:  # the bare-call trial alone, for the machine's slowdown
+            results = run_interleaved(
+                [CallBench("call_function", "bare function call", "f()")], cfg
+            )
+        else:
+            results = run_all(cfg)
         vs_original = None
         if original is not None:
             progress("the original SMACH core, same run")
@@ -875,7 +907,7 @@ def measure(args: argparse.Namespace, cfg: Config, original: Any) -> int:
             logging.getLogger(logger_name).setLevel(level)
     load = (load_before, os.getloadavg()[0])
     progress(f"done in {time.perf_counter() - started:.1f} s")
-    summary = report(results, cfg, load)
+    summary = report(results, cfg, load) if not cfg.only else {}
     if vs_original is not None:
         slowdown = results["call_function"].median * 1000 / QUIET_CALL_NS
         lines, summary["same_run_original"] = core_compare.report(vs_original, cfg, slowdown)

@@ -1,16 +1,23 @@
-"""Test-wide settings: keep ROS 2 traffic on this machine, one DDS domain per run, and
-Ctrl-C reaches the command-line programs the tests start."""
+"""Test-wide settings: keep ROS 2 traffic on this machine, one DDS domain per run (and
+per xdist worker), Ctrl-C reaches the command-line programs the tests start; every
+test is put in its tier (tests/tiers.py) and ``--store-durations`` records how long
+each took in tests/durations.json."""
 
 from __future__ import annotations
 
 import os
-import random
 import signal
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+import tiers
 
 # DDS would otherwise multicast off the machine; a random domain per run keeps
-# concurrent test runs apart.
+# concurrent test runs apart, and one more per xdist worker keeps the workers apart.
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-os.environ.setdefault("ROS_DOMAIN_ID", str(random.randint(101, 200)))
+os.environ["ROS_DOMAIN_ID"] = tiers.worker_ros_domain(os.environ, tiers.xdist_worker())
 
 # A suite started in the background by a non-interactive shell (`.ci/run &`) inherits
 # SIGINT ignored, and every program it starts would too: the tests that press Ctrl-C
@@ -18,3 +25,51 @@ os.environ.setdefault("ROS_DOMAIN_ID", str(random.randint(101, 200)))
 # comes. A handled signal is reset to its default in the programs started from here.
 if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
     signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    group = parser.getgroup("tiers", "test tiers (tests/tiers.py)")
+    group.addoption(
+        "--store-durations",
+        action="store_true",
+        help="after the run, write each test's seconds to the durations file "
+        "(merged with the tests this run did not run)",
+    )
+    group.addoption(
+        "--durations-path",
+        default=str(tiers.DURATIONS_FILE),
+        help="the durations file read to find slow tests and written by "
+        "--store-durations (default: tests/durations.json)",
+    )
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    if config.getoption("store_durations") and not hasattr(config, "workerinput"):
+        recorder = tiers.DurationRecorder(Path(config.getoption("durations_path")))
+        config.pluginmanager.register(recorder, "tiers-durations")
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    # tryfirst: before -m deselects by these markers and xdist reads the groups.
+    collected = [tiers.plain_nodeid(item.nodeid) for item in items]
+    recorder = config.pluginmanager.get_plugin("tiers-durations")
+    if isinstance(recorder, tiers.DurationRecorder):
+        recorder.collected.update(collected)
+    workeroutput = getattr(config, "workeroutput", None)
+    if workeroutput is not None:  # an xdist worker: tell the controller what it collected
+        workeroutput["tiers_collected"] = collected
+    workerinput = getattr(config, "workerinput", {})
+    if "tiers_durations" in workerinput:  # read once by the controller: the same for all
+        durations = workerinput["tiers_durations"]
+    else:
+        durations = tiers.load_durations(Path(config.getoption("durations_path")))
+    tiers.assign(items, durations, groups=config.pluginmanager.hasplugin("xdist"))
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_configure_node(node: Any) -> None:
+    # xdist's controller, starting a worker: every worker groups and tiers the tests
+    # from the same durations, even if the file changes while they start.
+    path = Path(node.config.getoption("durations_path"))
+    node.workerinput["tiers_durations"] = tiers.load_durations(path)

@@ -80,3 +80,85 @@ def test_a_module_over_600_lines_says_why_at_its_top() -> None:
         if "over 600 lines:" not in " ".join(doc.lower().split()):
             unexplained.append(f"{path.relative_to(ROOT)} ({text.count(chr(10))} lines)")
     assert unexplained == [], "split these or say why at the top: " + ", ".join(unexplained)
+
+
+# -- the smach core ---------------------------------------------------------------------------
+def _smach_core_imports(src: Path) -> dict[str, set[str]]:
+    """``{core module: smach modules it imports}`` for every ``smach/*.py`` but the facade.
+
+    Every import counts, also those under ``TYPE_CHECKING`` and inside functions.
+    ``import smach`` (the facade, for the replaceable loggers and shutdown check) is
+    not an edge; ``from smach import worker_pool`` is one to ``smach.worker_pool``.
+    """
+    import ast
+
+    core = {p.stem for p in (src / "smach").glob("*.py") if p.stem != "__init__"}
+    graph: dict[str, set[str]] = {}
+    for name in sorted(core):
+        tree = ast.parse((src / "smach" / f"{name}.py").read_text(encoding="utf-8"))
+        targets: set[str] = set()
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+                if node.module == "smach":
+                    targets |= {f"smach.{a.name}" for a in node.names if a.name in core}
+                elif node.module.startswith("smach."):
+                    targets.add(node.module)
+            elif isinstance(node, ast.Import):
+                targets |= {a.name for a in node.names if a.name.startswith("smach.")}
+        graph[f"smach.{name}"] = targets
+    return graph
+
+
+def _cycle(graph: dict[str, set[str]]) -> list[str]:
+    """One import cycle of ``graph`` (``[a, b, ..., a]``), or ``[]`` if it has none."""
+    state: dict[str, int] = {}  # 1 on the current path, 2 done
+    path: list[str] = []
+
+    def visit(node: str) -> list[str]:
+        state[node] = 1
+        path.append(node)
+        for nxt in sorted(graph.get(node, ())):
+            if state.get(nxt) == 1:
+                return [*path[path.index(nxt) :], nxt]
+            if nxt in graph and nxt not in state:
+                found = visit(nxt)
+                if found:
+                    return found
+        path.pop()
+        state[node] = 2
+        return []
+
+    for start in sorted(graph):
+        if start not in state:
+            found = visit(start)
+            if found:
+                return found
+    return []
+
+
+def test_smach_core_modules_import_each_other_without_cycles_counting_type_only_imports() -> None:
+    assert _cycle(_smach_core_imports(ROOT / "src")) == []
+
+
+def test_no_smach_core_module_imports_introspection_or_ros() -> None:
+    outward = {
+        module: sorted(t for t in targets if t.startswith(("smach.introspection", "smach.ros")))
+        for module, targets in _smach_core_imports(ROOT / "src").items()
+    }
+    assert {m: t for m, t in outward.items() if t} == {}
+
+
+def test_the_core_cycle_check_finds_a_cycle_made_only_of_type_checking_imports(
+    tmp_path: Path,
+) -> None:
+    pkg = tmp_path / "smach"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("")
+    (pkg / "state.py").write_text(
+        "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from smach.container import C\n"
+    )
+    (pkg / "container.py").write_text("from smach.state import State\n")
+    (pkg / "leaf.py").write_text("import smach\nfrom smach import state\n")
+    graph = _smach_core_imports(tmp_path)
+    assert graph["smach.leaf"] == {"smach.state"}
+    assert _cycle(graph) == ["smach.container", "smach.state", "smach.container"]

@@ -47,15 +47,9 @@ if TYPE_CHECKING:
         parse_fact,
         task_from_problem,
     )
-    from plan_bridge.planning.planner import (
-        Planner,
-        PlanResult,
-        PlanStatus,
-        PlanStep,
-        UPPlanner,
-        get_planner,
-        installed_planners,
-    )
+    from plan_bridge.planning.planner import UPPlanner
+    from plan_bridge.planning.registry import get_planner, installed_planners
+    from plan_bridge.planning.types import Planner, PlanResult, PlanStatus, PlanStep
     from plan_bridge.skills.registry import Skill, SkillRegistry
 
 __version__ = "0.1.0"
@@ -69,13 +63,13 @@ _LAZY = {
     "load_task_from_text": "plan_bridge.pddl.task",
     "parse_fact": "plan_bridge.pddl.task",
     "task_from_problem": "plan_bridge.pddl.task",
-    "PlanResult": "plan_bridge.planning.planner",
-    "PlanStatus": "plan_bridge.planning.planner",
-    "PlanStep": "plan_bridge.planning.planner",
-    "Planner": "plan_bridge.planning.planner",
+    "PlanResult": "plan_bridge.planning.types",
+    "PlanStatus": "plan_bridge.planning.types",
+    "PlanStep": "plan_bridge.planning.types",
+    "Planner": "plan_bridge.planning.types",
     "UPPlanner": "plan_bridge.planning.planner",
-    "get_planner": "plan_bridge.planning.planner",
-    "installed_planners": "plan_bridge.planning.planner",
+    "get_planner": "plan_bridge.planning.registry",
+    "installed_planners": "plan_bridge.planning.registry",
     "Skill": "plan_bridge.skills.registry",
     "SkillRegistry": "plan_bridge.skills.registry",
     "WorldState": "plan_bridge.execution.world",

@@ -17,8 +17,8 @@ from typing import Any, ClassVar
 import smach
 from smach import worker_pool
 from smach.container import Container, construction_method
+from smach.events import Event, StateEntered, StateExited
 from smach.exceptions import InvalidStateError, InvalidUserCodeError
-from smach.introspection.events import Event, StateEntered, StateExited
 from smach.state import State
 from smach.user_data import Remapper, UserData
 from smach.util import key_list
@@ -73,6 +73,8 @@ class Concurrence(Container):
     _transition_cb_events: ClassVar[tuple[type[Event], ...]] = (StateEntered, StateExited)
     # The outcome policy only chooses among declared outcomes (checked at construction).
     _outcome_checked = True
+    # Whether a subclass overrides run_branch (set per class: one test per child).
+    _branches_hooked: ClassVar[bool] = False
 
     def __init__(
         self,
@@ -135,7 +137,7 @@ class Concurrence(Container):
             raise InvalidStateError(
                 f"{self._path}: a child labelled {label!r} was already added; labels must be unique"
             )
-        self._adopt_child(label, state)
+        self.adopt_child(label, state)
         self._states[label] = state
         self._remappings[label] = dict(remapping or {})
         self._invalidate()
@@ -161,14 +163,14 @@ class Concurrence(Container):
                     )
         return problems
 
-    def _compile(self) -> None:
+    def compile_children(self) -> None:
         self._children = [
-            _Child(label, state, self._remapper(label, state, self._remappings[label]))
+            _Child(label, state, self.child_remapper(label, state, self._remappings[label]))
             for label, state in self._states.items()
         ]
 
     # -- execution ------------------------------------------------------------------------------
-    def _run(self) -> str | None:
+    def run_children(self) -> str | None:
         """Run all children at once; return the outcome chosen by the policy."""
         children = self._children
         assert children is not None
@@ -226,24 +228,34 @@ class Concurrence(Container):
             run.helper = helper
         worker_pool.submit(helper)
 
+    def run_branch(self, label: str, body: Callable[[], None]) -> None:
+        """Hook: run one child's branch, ``body()``, in the thread that picked it up.
+
+        Override it to wrap every branch (take a turn on a shared clock, hold a
+        resource): call ``body()`` exactly once. The default just calls it.
+        """
+        body()
+
     def _run_child(self, run: _Run, child: _Child) -> None:
+        if self._branches_hooked:
+            self.run_branch(child.label, lambda: self._run_branch(run, child))
+        else:
+            self._run_branch(run, child)
+
+    def _run_branch(self, run: _Run, child: _Child) -> None:
         label = child.label
-        observed = self._bus.listeners or self._local  # (log lines need no lock: see below)
-        control = self._bus.control  # runtime control (smach.control): None unless attached
-        path = f"{self._path}/{label}" if control is not None else ""
+        observed = self._rt.bus.listeners or self._local  # (log lines need no lock: see below)
         try:
-            if control is not None:
-                control.enter(self, path, child.state)  # holds this branch while paused
-            if observed:
-                self._emit_entered(label)
-            outcome = child.state.execute(child.remapper)
-            if control is not None:
-                outcome = control.leave(path, child.state, outcome)
-        except Exception as exc:
-            if control is not None:
-                control.leave(path, child.state, None)
-            error = self._child_error(label, child.state, exc)
-            error.__cause__ = exc
+            if observed or self._rt.control is not None:
+                outcome = self.step_child(
+                    label, child.state, child.remapper, check=False, report_exit=False
+                )
+            else:  # nobody listens, nothing controls: step_child would only do this
+                try:
+                    outcome = child.state.execute(child.remapper)  # type: ignore[assignment]
+                except Exception as exc:
+                    raise self._child_error(label, child.state, exc) from exc
+        except Exception as error:
             self._child_failed(run, error)
             return
         if outcome not in child.outcomes:
@@ -257,6 +269,13 @@ class Concurrence(Container):
                 self._log_exited(label, outcome)
         if next(run.finished) == run.size:
             run.done.release()
+
+    def _forward_preempt(self, state: State) -> None:
+        """Nothing: a Concurrence preempts its unfinished children itself."""
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        cls._branches_hooked = cls.run_branch is not Concurrence.run_branch
 
     def _child_finished_watched(self, run: _Run, label: str, outcome: str, observed: bool) -> None:
         """Record an outcome, tell the listeners and ask child_termination_cb, in order."""

@@ -7,21 +7,21 @@ import functools
 import threading
 import types
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Concatenate, Generic, ParamSpec, TypeVar
+from typing import Any, Concatenate, Generic, ParamSpec, TypeVar
 
-if TYPE_CHECKING:
-    from smach.container import Container
+from smach.state import State
 
 __all__ = ["construction_method"]
 
-C = TypeVar("C", bound="Container")
+C = TypeVar("C", bound=State)
 P = ParamSpec("P")
 R = TypeVar("R")
 
 
 class _ConstructionStack(threading.local):
     def __init__(self) -> None:
-        self.stack: list[Container] = []
+        # The open containers (smach.container.Container), innermost last.
+        self.stack: list[Any] = []
 
 
 _construction = _ConstructionStack()
@@ -48,7 +48,7 @@ class construction_method(Generic[C, P, R]):  # noqa: N801  (reads like a decora
         assert objtype is not None
         on_class = self._on_class.get(objtype)
         if on_class is None:
-            owner = objtype
+            owner: Any = objtype  # a Container class: it has _currently_opened_container
 
             @functools.wraps(fn)
             def on_open_container(*args: P.args, **kwargs: P.kwargs) -> R:

@@ -7,19 +7,24 @@ Containers share five mechanisms, implemented here once:
   (``sm.add(...)``) act on that instance (the stack: :mod:`smach.construction`);
 * the run protocol: :meth:`Container.execute` is the same for every container
   (compile once, refuse a second concurrent run, begin, started event, the
-  container's own loop :meth:`Container._run`, terminated event, output keys,
-  error event, after-run bookkeeping); a container type writes only ``_run``;
+  container's own loop :meth:`Container.run_children`, terminated event, output
+  keys, error event, after-run bookkeeping); a container type writes only
+  ``run_children``, and runs each child through :meth:`Container.step_child`;
 * scoping: each container owns a local :class:`UserData`; declared input keys are
   copied in from the parent at the start of a run, declared output keys copied out at
   the end; children see it through a :class:`Remapper`;
-* events: every container reports to the event bus of its tree; the SMACH start,
+* events: every container reports to the event bus of its tree (held, with runtime
+  control and the preempt and log switches, by the tree's
+  :class:`~smach.runtime.Runtime`); the SMACH start,
   transition and termination callbacks are listeners of it; INFO log lines are
   written beside it (see :mod:`smach.container_events`);
 * preemption: requests are forwarded to the running children; each top-level run
   ends with clean preempt flags in the whole tree.
 
-A new container type subclasses :class:`Container`, implements ``_run`` (and, if it
-precomputes per-child tables, ``_compile``) and the introspection methods
+A new container type subclasses :class:`Container`, adopts its children with
+:meth:`Container.adopt_child` (:meth:`Container.replace_child` to swap one), gives
+each the view :meth:`Container.child_remapper` builds, implements ``run_children``
+(and, if it precomputes per-child tables, ``compile_children``) and the introspection methods
 (``get_children``, ``get_initial_states``, ``get_active_states``,
 ``get_internal_edges``, ``set_initial_state``, ``consistency_problems``); see
 docs/containers.md.
@@ -32,20 +37,21 @@ import threading
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from typing import Any, ClassVar, TypeVar
 
-import smach as _smach
 from smach.construction import _construction, _label_problem, construction_method
+from smach.container_checks import ContainerChecks
 from smach.container_events import ContainerEvents
+from smach.container_scope import ContainerScope, CopyPlan
+from smach.events import Capture
 from smach.exceptions import (
     InvalidConstructionError,
     InvalidOutcomeError,
     InvalidStateError,
-    InvalidTransitionError,
     InvalidUserCodeError,
     NoContainerOpenError,
     SmachError,
 )
-from smach.introspection.events import EventBus
 from smach.log import info_enabled
+from smach.runtime import Runtime
 from smach.state import State
 from smach.user_data import Remapper, UserData, make_remapper
 
@@ -56,10 +62,10 @@ _current_thread = threading.current_thread
 C = TypeVar("C", bound="Container")
 
 
-class Container(ContainerEvents, State):
+class Container(ContainerEvents, ContainerChecks, ContainerScope, State):
     """Base class of every container (a state made of states)."""
 
-    #: True where ``_run`` can only return a declared outcome (checked before the run),
+    #: True where ``run_children`` can only return a declared outcome (checked before the run),
     #: so the protocol need not check it again.
     _outcome_checked: ClassVar[bool] = False
 
@@ -71,9 +77,12 @@ class Container(ContainerEvents, State):
     ) -> None:
         super().__init__(outcomes, input_keys, output_keys)
         self._userdata = UserData()
-        self._bus = EventBus()
+        self._rt = Runtime()
         self._path = "/ROOT"
-        self._parent: Container | None = None
+        self._parent = None  # (on the instance: run loops read it on every level)
+        # The views child_remapper() built since the last compile: retargeted when
+        # this container joins another tree.
+        self._views: list[Remapper] = []
         # (The SMACH callbacks: class-level empty tuples until one is registered.)
         self._local = ()
         self._log_info = False
@@ -86,7 +95,9 @@ class Container(ContainerEvents, State):
         self._stale = True
         self._consistent = False
         self._subtree_ok = False
-        self._copies_in = self._copies_out = True  # (until _prepare knows better)
+        # (True until _prepare knows better; then how to copy: see _copy_input_keys)
+        self._copies_in: bool | CopyPlan = True
+        self._copies_out: bool | CopyPlan = True
 
     # -- userdata --------------------------------------------------------------------
     @property
@@ -113,8 +124,8 @@ class Container(ContainerEvents, State):
         """
         self._stale = True
         self._consistent = False
-        node: Container | None = self
-        while node is not None and node._subtree_ok:
+        node: State | None = self
+        while isinstance(node, Container) and node._subtree_ok:
             node._subtree_ok = False
             node = node._parent
 
@@ -122,35 +133,31 @@ class Container(ContainerEvents, State):
         self._invalidate()
         super()._interface_changed()
 
-    def _remapper(self, label: str, state: State, remapping: Mapping[str, str] | None) -> Remapper:
-        return make_remapper(
+    def child_remapper(
+        self, label: str, state: State, remapping: Mapping[str, str] | None = None
+    ) -> Remapper:
+        """The view of this container's userdata that the child ``label`` gets as ``ud``.
+
+        It enforces the child's declared keys, translates them through ``remapping``
+        (child key -> container key) and reports writes to the tree's listeners.
+        Build it in :meth:`compile_children` and reuse it for every run: it follows
+        this container into whatever tree adopts it.
+        """
+        view = make_remapper(
             self._userdata,
             state.get_registered_input_keys(),
             state.get_registered_output_keys(),
             remapping,
-            owner=self,
+            path=self._path,
+            bus=self._rt.bus,
             writer=label,
         )
+        self._views.append(view)
+        if isinstance(state, ContainerScope):  # a container copies its keys through it
+            state._plan_copies(view)
+        return view
 
-    def _copy_input_keys(self, parent_ud: UserData | None) -> None:
-        if parent_ud is None:
-            return
-        local = self._userdata._data
-        for key in self._input_keys:
-            if key in parent_ud:
-                local[key] = _raw_get(parent_ud, key)
-            elif key not in local:
-                _smach.logwarn(
-                    f"{self._path}: input key {key!r} is not available in the parent userdata"
-                )
-
-    def _copy_output_keys(self, parent_ud: UserData | None) -> None:
-        if parent_ud is None:
-            return
-        local = self._userdata._data
-        for key in self._output_keys:
-            if key in local:
-                parent_ud[key] = local[key]
+    _remapper = child_remapper  # (the name before the extension API was public)
 
     # -- construction ------------------------------------------------------------------
     def open(self) -> None:
@@ -223,7 +230,13 @@ class Container(ContainerEvents, State):
             )
         return top
 
-    def _adopt_child(self, label: str, state: State) -> None:
+    def adopt_child(self, label: str, state: State) -> None:
+        """Make ``state`` this container's child ``label``: check the label, set the
+        child's parent and attach it (and everything below it) to this tree, at
+        ``<this path>/<label>``, with the tree's listeners and runtime control.
+
+        Store the child in the container's own tables as well (``get_children``).
+        """
         problem = _label_problem(label)
         if problem:
             raise InvalidStateError(f"{self._path}: {problem}")
@@ -232,19 +245,40 @@ class Container(ContainerEvents, State):
                 f"{self._path}/{label}: expected a smach.State, got {type(state).__name__}"
             )
         state._parent = self
-        state._adopt(self._bus, f"{self._path}/{label}")
+        state._attach(self._rt, f"{self._path}/{label}")
+        self._invalidate()  # (compiled again before the next run)
 
-    def _adopt(self, bus: EventBus, path: str) -> None:
-        old = self._bus
-        if old is not bus:
-            for listener in old.listeners:
-                bus.add(listener)
-            if bus.control is None:  # a controlled subtree stays controlled
-                bus.control = old.control
-        self._bus = bus
+    _adopt_child = adopt_child  # (the name before the extension API was public)
+
+    def replace_child(self, label: str, state: State, old: State | None = None) -> None:
+        """Put ``state`` in the place of ``old`` (or of nothing) as the child ``label``.
+
+        ``old`` leaves the tree (no parent, a runtime context of its own) and ``state``
+        is adopted; what was compiled from the children is rebuilt before the next run.
+        Also while this container runs: a container that builds its child per run (a
+        plan) swaps it in with this. Store ``state`` in the container's own tables too.
+        """
+        if old is not None and old is not state:
+            old._detach()
+        self.adopt_child(label, state)
+
+    def _attach(self, runtime: Runtime, path: str) -> None:
+        old = self._rt
+        if old is not runtime:
+            old.merge_into(runtime)
+        self._rt = runtime
         self._path = path
+        bus = runtime.bus
+        for view in self._views:
+            view._retarget(path, bus)
         for label, child in self.get_children().items():
-            child._adopt(bus, f"{path}/{label}")
+            child._attach(runtime, f"{path}/{label}")
+
+    def _detach(self) -> None:
+        self._parent = None
+        own = Runtime()
+        self._rt = own  # (so that nothing of the tree left is merged into it)
+        self._attach(own, "/ROOT")
 
     def set_root_path(self, path: str) -> None:
         """Name this (top-level) container in event paths, e.g. ``/SM_ROOT``."""
@@ -252,7 +286,7 @@ class Container(ContainerEvents, State):
             raise InvalidStateError(
                 f"a root path starts with '/' and has no trailing '/': {path!r}"
             )
-        self._adopt(self._bus, path.rstrip("/") or "")
+        self._attach(self._rt, path.rstrip("/") or "")
 
     # -- the run protocol ---------------------------------------------------------------
     def execute(self, parent_ud: UserData | None = None) -> str | None:
@@ -264,9 +298,9 @@ class Container(ContainerEvents, State):
            checked once, the run tables are built);
         2. refuse a second run while one is going on;
         3. ``_begin``: copy input keys in, decide who listens this run;
-        4. ``container_started``; then the container's own loop, ``_run()``;
+        4. ``container_started``; then the container's own loop, ``run_children()``;
         5. the outcome checked against the declared ones; ``container_terminated``;
-           output keys copied out (all skipped when ``_run`` returned ``None``
+           output keys copied out (all skipped when ``run_children`` returned ``None``
            because ``smach.is_shutdown()`` became true);
         6. on an exception, an ``error`` event before it propagates;
         7. always: the running flag cleared, and preempt requests addressed to this
@@ -279,7 +313,7 @@ class Container(ContainerEvents, State):
         self._running = True
         try:
             self._begin(parent_ud)
-            bus = self._bus
+            bus = self._rt.bus
             if bus.listeners or self._local:
                 self._thread = _current_thread().name
                 self._emit_started(self._start_states(), self._thread)
@@ -287,7 +321,7 @@ class Container(ContainerEvents, State):
                 self._thread = None
                 if self._log_info:
                     self._log_started()
-            outcome = self._run()
+            outcome = self.run_children()
             if outcome is None:
                 return None
             if not self._outcome_checked and outcome not in self._outcomes:
@@ -307,20 +341,24 @@ class Container(ContainerEvents, State):
             raise
         finally:
             self._running = False
-            if self._bus.preempt_seen:
+            if self._rt.preempt_seen:
                 self._after_run()
 
-    def _run(self) -> str | None:
+    def run_children(self) -> str | None:
         """Hook: the container's own loop; return the container's outcome.
 
         Called by :meth:`execute` between the start and the end of the protocol, with
-        the local userdata filled in and the compiled tables ready. Run the children,
-        forward preemption, emit the per-child events (``_emit_entered``,
-        ``_emit_exited``, ``_emit_transition`` when :meth:`_observed`), wrap child
-        errors (``_child_error``, ``_bad_outcome``). Return ``None`` only when
-        ``smach.is_shutdown()`` stopped the run.
+        the local userdata filled in and the compiled tables ready. Run each child
+        with :meth:`step_child` (it forwards preemption, gives runtime control its
+        say, emits the per-child events and log lines, wraps child errors and checks
+        the outcome); emit ``_emit_transition`` between children if the container
+        has transitions. Return ``None`` only when ``smach.is_shutdown()`` stopped
+        the run. (Subclasses written before this hook was public override ``_run``.)
         """
-        raise NotImplementedError(f"{type(self).__name__} must implement _run(self)")
+        return self._run()
+
+    def _run(self) -> str | None:
+        raise NotImplementedError(f"{type(self).__name__} must implement run_children(self)")
 
     def _start_states(self) -> list[str]:
         """The states a run starts in (the ``container_started`` event's)."""
@@ -334,19 +372,27 @@ class Container(ContainerEvents, State):
         """Before a run (or at ``close()``): check the tree once, build the run tables."""
         if not self._subtree_ok:
             self._check_before_run()
-        self._compile()
+        self._views.clear()
+        self.compile_children()
         # Flags on the instance, so that a run does not touch the key dicts (a fresh
         # machine's first run pays a cache miss for every object it touches).
         self._copies_in = bool(self._input_keys)
         self._copies_out = bool(self._output_keys)
         self._stale = False
 
-    def _compile(self) -> None:
-        """Hook: build this container's run tables (remappers, transition tables).
+    def compile_children(self) -> None:
+        """Hook: build this container's run tables (the children's
+        :meth:`child_remapper` views, transition tables).
 
-        Called once after every change (see :meth:`_invalidate`), when everything
-        below is known to be consistent; the run loop then only looks things up.
+        Called once after every change (adopting or replacing a child, a new
+        interface or userdata: see :meth:`_invalidate`), when everything below is
+        known to be consistent; the run loop then only looks things up.
+        (Subclasses written before this hook was public override ``_compile``.)
         """
+        self._compile()
+
+    def _compile(self) -> None:
+        """The hook's name before the extension API was public (nothing by default)."""
 
     def request_preempt(self) -> None:
         """Ask this container to stop: set its flag, then forward to the running children."""
@@ -360,8 +406,17 @@ class Container(ContainerEvents, State):
         # (A container that writes its own execute() is running while it has active states.)
         return self._running or bool(self.get_active_states())
 
+    def __getstate__(self) -> dict[str, Any]:
+        state = super().__getstate__()
+        state.pop("_views", None)  # (views of the userdata are rebuilt, never copied)
+        # Copy plans name the parent's view: a copy plans again on its first run.
+        state["_copies_in"] = bool(state.get("_copies_in"))
+        state["_copies_out"] = bool(state.get("_copies_out"))
+        return state
+
     def __setstate__(self, state: dict[str, Any]) -> None:
         super().__setstate__(state)
+        self._views = []
         self._stale = True  # a copy's tables are rebuilt (subclasses drop them in copies)
 
     # -- running helpers (also for containers that write their own execute) ------------
@@ -369,14 +424,15 @@ class Container(ContainerEvents, State):
         """Start a run: copy input keys in, decide whether log lines are wanted.
 
         Whether INFO lines are wanted is decided once per top-level run (it costs a
-        logging lookup) and shared through the bus with the containers below.
+        logging lookup) and shared through the tree's runtime context (``Runtime``)
+        with the containers below.
         """
         if parent_ud is not None and self._copies_in:
             self._copy_input_keys(parent_ud)
-        bus = self._bus
+        rt = self._rt
         if self._parent is None:
-            bus.log_info = info_enabled()
-        self._log_info = bus.log_info
+            rt.log_info = info_enabled()
+        self._log_info = rt.log_info
 
     def _end(self, parent_ud: UserData | None) -> None:
         """Finish a run normally: copy output keys out."""
@@ -391,48 +447,74 @@ class Container(ContainerEvents, State):
         those states. The container's own flag is kept (it is how an unserviced
         request flows on to the parent's next state) unless this is the top level.
         """
-        bus = self._bus
-        if bus.preempt_seen:
+        rt = self._rt
+        if rt.preempt_seen:
             for child in self.get_children().values():
                 child._reset_preempt_tree()
             if self._parent is None:
-                bus.preempt_seen = False
+                rt.preempt_seen = False
                 self._clear_preempt()
 
-    def _step(self, label: str, state: State, ud: UserData, thread: str | None = None) -> str:
-        """Run one child once, as every container does (StateMachine inlines it).
+    def step_child(
+        self,
+        label: str,
+        state: State,
+        ud: UserData,
+        thread: str | None = None,
+        pending: tuple[Capture, ...] = (),
+        *,
+        check: bool = True,
+        report_exit: bool = True,
+    ) -> str:
+        """Run the child ``label`` once with ``ud`` (its :meth:`child_remapper` view);
+        return its outcome. Every container runs its children through this.
 
-        A pending preempt request is forwarded first; runtime control (``bus.control``)
-        may hold the child before it starts and replace its outcome after; the
-        entered/exited events or log lines go out; an exception is wrapped with the
-        child's path; an undeclared outcome is refused.
+        In order: a pending preempt request of this container is forwarded to the
+        child (:meth:`_forward_preempt`); runtime control (``Runtime.control``) may
+        hold the child before it starts; ``state_entered`` goes out (or the INFO
+        line); the child runs, an exception is wrapped with the child's path
+        (:meth:`_child_error`); runtime control may replace the outcome (a forced
+        one); an undeclared outcome is refused (unless ``check`` is false: a caller
+        that looks the outcome up in its own table checks there); ``state_exited``
+        goes out (unless ``report_exit`` is false: a caller that reports the exit
+        with what follows it, a transition, does so itself).
+
+        ``thread``: the running thread's name, if the caller has it. ``pending``:
+        captures of this container that precede the child's ``state_entered`` (a
+        state machine's previous exit and transition), sent in one call with it
+        when only capture listeners listen.
         """
         if self._preempt_requested:
-            state.request_preempt()
-        control = self._bus.control  # runtime control (smach.control): None unless attached
+            pending = self._release(pending)
+            self._forward_preempt(state)
+        control = self._rt.control
         path = state._path
         if control is not None:
+            pending = self._release(pending)
             control.enter(self, path, state)  # holds the child while paused
-        observed = self._bus.listeners or self._local
-        if observed:
-            self._emit_entered(label, thread)  # (and the log line, if wanted)
-        elif self._log_info:
-            self._log_entered(label)
+        self._report_entered(label, path, thread, pending)
         try:
             outcome = state.execute(ud)
         except Exception as exc:
             if control is not None:
                 control.leave(path, state, None)
             raise self._child_error(label, state, exc) from exc
-        if control is not None:
+        if control is not None:  # a forced outcome replaces the returned one
             outcome = control.leave(path, state, outcome)
-        if outcome not in state._outcomes:
+        if check and outcome not in state._outcomes:
             raise self._bad_outcome(label, state, outcome)
-        if observed:
-            self._emit_exited(label, outcome, thread)
-        elif self._log_info:
-            self._log_exited(label, outcome)
-        return outcome
+        if report_exit:
+            if self._rt.bus.listeners or self._local:
+                self._emit_exited(label, outcome, thread)  # (and the log line, if wanted)
+            elif self._log_info:
+                self._log_exited(label, outcome)
+        return outcome  # type: ignore[return-value]  # (checked above, or by the caller)
+
+    _step = step_child  # (the name before the extension API was public)
+
+    def _forward_preempt(self, state: State) -> None:
+        """Pass this container's pending preempt request on to ``state``, about to start."""
+        state.request_preempt()
 
     def _child_error(self, label: str, state: State, exc: Exception) -> InvalidUserCodeError:
         """Wrap an exception raised by a child's execute(), naming the child's path.
@@ -486,80 +568,3 @@ class Container(ContainerEvents, State):
 
     def get_internal_edges(self) -> list[tuple[str, str, str | None]]:
         raise NotImplementedError
-
-    def check_consistency(self) -> None:
-        """Raise :class:`InvalidTransitionError` listing every problem of this container."""
-        self._raise_problems(self.consistency_problems())
-
-    def consistency_problems(self) -> list[str]:
-        """Every reason this container (alone) cannot run, one line each."""
-        raise NotImplementedError
-
-    def _raise_problems(self, problems: list[str]) -> None:
-        if problems:
-            count = f"{len(problems)} problem{'s' if len(problems) > 1 else ''}"
-            raise InvalidTransitionError(
-                f"{_KIND_NAMES.get(type(self).__name__, type(self).__name__)} {self._path} is "
-                f"inconsistent ({count}):\n  " + "\n  ".join(problems)
-            )
-
-    def _own_problems(self) -> list[str]:
-        try:
-            return self.consistency_problems()
-        except NotImplementedError:
-            try:
-                self.check_consistency()
-            except SmachError as exc:
-                return [f"{self._path}: {exc}"]
-            return []
-
-    def subtree_problems(self) -> list[str]:
-        """The consistency problems of this container and of every container below it."""
-        problems: list[str] = []
-        stack: list[State] = [self]
-        while stack:
-            node = stack.pop()
-            if isinstance(node, Container):
-                problems.extend(node._own_problems())
-                stack.extend(reversed(list(node.get_children().values())))
-        return problems
-
-    def _check_before_run(self) -> None:
-        """Refuse to run if anything in the tree below is inconsistent (all problems at once).
-
-        A container checked since its last change is not checked again, and a subtree
-        found consistent is marked so: a tree is checked once, not once per level.
-        """
-        problems: list[str] = []
-        checked: list[Container] = []
-        stack: list[State] = [self]
-        while stack:
-            node = stack.pop()
-            if not isinstance(node, Container) or node._subtree_ok:
-                continue
-            checked.append(node)
-            if not node._consistent:
-                own = node._own_problems()
-                problems.extend(own)
-                node._consistent = not own
-            stack.extend(reversed(list(node.get_children().values())))
-        self._raise_problems(problems)
-        for node in checked:
-            node._subtree_ok = True
-
-
-_KIND_NAMES = {
-    "StateMachine": "state machine",
-    "Concurrence": "concurrence",
-    "Iterator": "iterator",
-}
-
-
-def _raw_get(ud: UserData, key: str) -> Any:
-    """Read a key without the read-only wrapper (for copying between scopes)."""
-    while isinstance(ud, Remapper):
-        if key not in ud._in:
-            ud._read(key)  # raises the undeclared-key error
-        key = ud._remap.get(key, key)
-        ud = ud._ud
-    return ud._data[key]

@@ -24,18 +24,19 @@ from collections.abc import Callable, Sequence
 from typing import Any, ClassVar
 
 import smach as _smach
-from smach.introspection.events import (
+from smach.events import (
+    Capture,
     ContainerStarted,
     ContainerTerminated,
     ErrorRaised,
     Event,
-    EventBus,
     Listener,
     StateEntered,
     StateExited,
     Transition,
     event_of,
 )
+from smach.runtime import Runtime
 from smach.user_data import UserData
 
 __all__ = ["ContainerEvents"]
@@ -52,7 +53,7 @@ class ContainerEvents:
     #: Which of this container's own events trigger the SMACH transition callbacks.
     _transition_cb_events: ClassVar[tuple[type[Event], ...]] = (Transition,)
 
-    _bus: EventBus
+    _rt: Runtime
     _path: str
     _userdata: UserData
     # The SMACH callbacks, registered (rarely) on the instance. Empty class-level
@@ -67,6 +68,13 @@ class ContainerEvents:
     _local: tuple[Listener, ...]
     # Whether this run writes INFO log lines (see Container._begin).
     _log_info: bool
+    #: Whether this class writes a line when a child is entered (``_log_entered``
+    #: overridden): set per class, so a loop tests one flag.
+    _logs_entries: ClassVar[bool] = False
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        cls._logs_entries = cls._log_entered is not ContainerEvents._log_entered
 
     def get_initial_states(self) -> list[str]:
         raise NotImplementedError
@@ -83,10 +91,10 @@ class ContainerEvents:
     # -- listeners and callbacks ------------------------------------------------------------
     def add_listener(self, listener: Listener) -> None:
         """Receive every event of the whole tree this container belongs to."""
-        self._bus.add(listener)
+        self._rt.bus.add(listener)
 
     def remove_listener(self, listener: Listener) -> None:
-        self._bus.remove(listener)
+        self._rt.bus.remove(listener)
 
     def register_start_cb(self, start_cb: Callable[..., Any], cb_args: Sequence[Any] = ()) -> None:
         """``start_cb(userdata, initial_states, *cb_args)`` at the start of each run."""
@@ -171,19 +179,19 @@ class ContainerEvents:
     # -- emitting --------------------------------------------------------------------------
     def _observed(self) -> bool:
         """Whether anybody listens to this container's events or reads its log lines."""
-        return bool(self._bus.listeners or self._local or self._log_info)
+        return bool(self._rt.bus.listeners or self._local or self._log_info)
 
     def _emit(self, event: Event) -> None:
         """Send one of this container's events to the tree's bus and to local listeners."""
-        if self._bus.listeners:
-            self._bus.emit(event)
+        if self._rt.bus.listeners:
+            self._rt.bus.emit(event)
         for listener in self._local:
             listener(event)
 
     def _deliver(self, event: Event) -> None:
         """Send an event the capture listeners already got to everybody else."""
-        if self._bus.event_listeners:
-            self._bus.deliver(event)
+        if self._rt.bus.event_listeners:
+            self._rt.bus.deliver(event)
         for listener in self._local:
             listener(event)
 
@@ -192,28 +200,59 @@ class ContainerEvents:
         viewer), an Event object only if somebody else listens. ``thread`` may be given
         by a caller that knows it (a run's own thread)."""
         capture = (cls, path, _monotonic(), thread or _current_thread().name, *fields)
-        bus = self._bus
+        bus = self._rt.bus
         if bus.sinks:
             bus.capture(capture)
         if bus.event_listeners or self._local:
             self._deliver(event_of(capture))
 
+    def _release(self, pending: tuple[Capture, ...]) -> tuple[Capture, ...]:
+        """Send held captures to the capture listeners in one call; return ``()``."""
+        if pending:
+            bus = self._rt.bus
+            for sink in bus.batch_sinks:
+                try:
+                    sink(pending)
+                except Exception as exc:
+                    bus.sink_failed(sink, exc)
+        return ()
+
+    def _report_entered(
+        self, label: str, path: str, thread: str | None, pending: tuple[Capture, ...]
+    ) -> None:
+        """``state_entered`` of the child at ``path`` (after ``pending``), or its log line."""
+        bus = self._rt.bus
+        if bus.event_listeners or self._local:
+            self._release(pending)
+            self._emit_entered(label, thread)  # (and the log line, if wanted)
+            return
+        if bus.sinks:  # capture listeners only (journal, viewer): no Event object
+            capture = (StateEntered, path, _monotonic(), thread or _current_thread().name, label)
+            if pending:
+                self._release((*pending, capture))
+            else:
+                bus.capture(capture)
+        else:
+            self._release(pending)
+        if self._log_info:
+            self._log_entered(label)
+
     # Each emitter: the event if anybody listens, the log line if lines are wanted.
     def _emit_started(self, initial_states: Sequence[str], thread: str | None = None) -> None:
-        if self._bus.listeners or self._local:
+        if self._rt.bus.listeners or self._local:
             kind = type(self).__name__
             self._send(ContainerStarted, self._path, thread, kind, tuple(initial_states))
         if self._log_info:
             self._log_started()
 
     def _emit_entered(self, label: str, thread: str | None = None) -> None:
-        if self._bus.listeners or self._local:
+        if self._rt.bus.listeners or self._local:
             self._send(StateEntered, f"{self._path}/{label}", thread, label)
         if self._log_info:
             self._log_entered(label)
 
     def _emit_exited(self, label: str, outcome: str | None, thread: str | None = None) -> None:
-        if self._bus.listeners or self._local:
+        if self._rt.bus.listeners or self._local:
             self._send(StateExited, f"{self._path}/{label}", thread, label, outcome)
         if self._log_info:
             self._log_exited(label, outcome)
@@ -221,7 +260,7 @@ class ContainerEvents:
     def _emit_transition(
         self, source: str, outcome: str, target: str, thread: str | None = None
     ) -> None:
-        if self._bus.listeners or self._local:
+        if self._rt.bus.listeners or self._local:
             self._send(Transition, self._path, thread, source, outcome, target)
         if self._log_info:
             self._log_transition(source, outcome, target)
@@ -229,12 +268,12 @@ class ContainerEvents:
     def _emit_terminated(
         self, terminal_states: Sequence[str], outcome: str | None, thread: str | None = None
     ) -> None:
-        if self._bus.listeners or self._local:
+        if self._rt.bus.listeners or self._local:
             states = tuple(terminal_states)
             self._send(ContainerTerminated, self._path, thread, states, outcome)
         if self._log_info:
             self._log_terminated(outcome)
 
     def _emit_error(self, exc: BaseException) -> None:
-        if self._bus.listeners:
+        if self._rt.bus.listeners:
             self._send(ErrorRaised, self._path, None, type(exc).__name__, str(exc))

@@ -22,7 +22,7 @@ Semantics (docs/control.md has the guarantees):
 
 The containers call two hooks, :meth:`Controller.enter` before a child starts and
 :meth:`Controller.leave` after it returns, only when a controller is attached to
-their tree (``EventBus.control``). A controller also attaches a no-op capture
+their tree (``Runtime.control``: the controller is the tree's step hook). A controller also attaches a no-op capture
 listener, so a controlled tree is an observed one: the ``StateMachine`` loop looks
 for a controller only on the steps somebody observes, and an unobserved machine
 pays one test of a local variable per transition for control.
@@ -45,8 +45,8 @@ from dataclasses import dataclass, field
 from typing import Any, Literal
 
 from smach.container import Container
+from smach.events import CaptureListener
 from smach.exceptions import SmachError
-from smach.introspection.events import CaptureListener
 from smach.state import State
 
 __all__ = [
@@ -164,7 +164,8 @@ def _ignore(capture: object) -> None:
 
 def controller_of(state: State) -> Controller | None:
     """The controller attached to the tree ``state`` belongs to, if any."""
-    return state._bus.control
+    control = state._rt.control
+    return control if isinstance(control, Controller) else None
 
 
 def check_pattern(pattern: object) -> str:
@@ -203,8 +204,8 @@ class Controller:
                 f"Controller needs a smach container (the root of the tree to control), "
                 f"got {type(root).__name__}"
             )
-        bus = root._bus
-        if bus.control is not None:
+        rt = root._rt
+        if rt.control is not None:
             raise ControlError(f"{root.path or 'the tree'} already has a controller attached")
         self.root = root
         self._lock = threading.RLock()
@@ -223,8 +224,8 @@ class Controller:
         # controller only on steps somebody observes, so an unobserved machine pays
         # nothing for control. This capture listener ignores what it gets.
         self._marker = CaptureListener(_ignore, _ignore)
-        bus.control = self
-        bus.add(self._marker)
+        rt.control = self
+        rt.bus.add(self._marker)
 
     # -- life cycle ------------------------------------------------------------------------
     def close(self) -> None:
@@ -235,10 +236,10 @@ class Controller:
             self._breakpoint = None
             self._steps = 0
             self._cond.notify_all()
-        bus = self.root._bus
-        if bus.control is self:
-            bus.control = None
-        bus.remove(self._marker)
+        rt = self.root._rt
+        if rt.control is self:
+            rt.control = None
+        rt.bus.remove(self._marker)
 
     def __enter__(self) -> Controller:
         return self

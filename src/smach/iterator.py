@@ -46,7 +46,7 @@ class Iterator(Container):
         self._loop_outcomes: list[str] = []
         self._break_outcomes: list[str] = []
         self._final_outcome_map: dict[str, str] = {}
-        # Compiled (see _compile): the state's remapper, the loop and break outcomes. One
+        # Compiled (see compile_children): the state's remapper, the loop and break outcomes. One
         # attribute: an instance keeps at most 29 (see Container, ``_start_cbs``).
         self._tables: tuple[Remapper, frozenset[str], frozenset[str]] | None = None
         self._index = 0
@@ -82,7 +82,7 @@ class Iterator(Container):
             raise InvalidStateError(
                 f"{self._path}/{label}: give loop_outcomes or break_outcomes, not both"
             )
-        self._adopt_child(label, state)
+        self.adopt_child(label, state)
         registered = state.get_registered_outcomes()
         unknown = [o for o in [*loops, *breaks] if o not in registered]
         if unknown:
@@ -118,17 +118,17 @@ class Iterator(Container):
                 )
         return problems
 
-    def _compile(self) -> None:
+    def compile_children(self) -> None:
         state, label = self._state, self._state_label
         assert state is not None and label is not None
         self._tables = (
-            self._remapper(label, state, self._remapping),
+            self.child_remapper(label, state, self._remapping),
             frozenset(self._loop_outcomes),
             frozenset(self._break_outcomes),
         )
 
     # -- execution -------------------------------------------------------------------------------
-    def _run(self) -> str | None:
+    def run_children(self) -> str | None:
         """Run the contained state once per item; return the (mapped) final outcome."""
         state, label, tables = self._state, self._state_label, self._tables
         assert state is not None and label is not None and tables is not None
@@ -143,7 +143,7 @@ class Iterator(Container):
         outcome: str | None = self._exhausted_outcome
         data = self._userdata._data
         it_label = self._items_label
-        bus = self._bus
+        bus = self._rt.bus
         thread = self._thread
         log = self._log_info  # (decided once per top-level run)
         path = self._path
@@ -165,7 +165,7 @@ class Iterator(Container):
                 ) from exc
             data[it_label] = item
             if bus.listeners or self._local or self._preempt_requested:
-                outcome = self._step(label, state, remapper, thread)
+                outcome = self.step_child(label, state, remapper, thread)
             else:  # nobody listens, no request to forward: _step inlined
                 if log:
                     smach.loginfo(f"Iterating item {self._index} of {path}")

@@ -57,19 +57,35 @@ def set_loggers(
 
 
 def info_enabled() -> bool:
-    """Whether INFO messages would reach anybody (checked once per container run)."""
+    """Whether INFO messages would reach anybody (checked once per top-level run).
+
+    True for custom loggers, unless the installed ``loginfo`` is the ``info`` method
+    of a logger that can say it drops INFO: a Python :class:`logging.Logger` (or
+    ``LoggerAdapter``) not enabled for INFO, or a logger with
+    ``get_effective_level()`` above INFO (an rclpy/rcutils logger, whose INFO is 20
+    too). Then no container formats a line that would be dropped.
+    """
     smach = sys.modules["smach"]
-    if smach.loginfo is not loginfo:
-        return True
-    return _logger.isEnabledFor(logging.INFO)
+    info = smach.loginfo
+    if info is loginfo:
+        return _logger.isEnabledFor(logging.INFO)
+    return _drops_info(info) is not True
 
 
-def debug_enabled() -> bool:
-    """Whether DEBUG messages would reach anybody."""
-    smach = sys.modules["smach"]
-    if smach.logdebug is not logdebug:
-        return True
-    return _logger.isEnabledFor(logging.DEBUG)
+def _drops_info(info: Any) -> bool | None:
+    """Whether the logger method ``info`` drops INFO messages (None: cannot tell)."""
+    owner = getattr(info, "__self__", None)
+    if owner is None or getattr(info, "__name__", "") != "info":
+        return None
+    try:
+        if isinstance(owner, logging.Logger | logging.LoggerAdapter):
+            return not owner.isEnabledFor(logging.INFO)
+        level = getattr(owner, "get_effective_level", None)
+        if callable(level):
+            return bool(int(level()) > logging.INFO)
+    except Exception:  # a logger that cannot answer: assume it writes
+        return None
+    return None
 
 
 def restore_default_loggers() -> None:

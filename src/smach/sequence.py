@@ -2,10 +2,8 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
-from typing import Any
+from collections.abc import Iterable
 
-from smach.container import construction_method
 from smach.exceptions import InvalidStateError
 from smach.state import State
 from smach.state_machine import StateMachine
@@ -34,21 +32,12 @@ class Sequence(StateMachine):
         super().__init__(outcomes, input_keys, output_keys)
         self._connector_outcome = connector_outcome
 
-    @construction_method
-    def add(
-        self,
-        label: str,
-        state: State,
-        transitions: Mapping[str, str | None] | None = None,
-        remapping: Mapping[str, str] | None = None,
-        constants: Mapping[str, Any] | None = None,
-    ) -> State:
-        """Add ``state`` after the previously added one."""
+    def _connectors(self, label: str, state: State) -> list[str]:
+        """Every state added leads to the next one on the connector outcome."""
         connector = self._connector_outcome
         if isinstance(state, State) and connector not in state.get_registered_outcomes():
             raise InvalidStateError(
                 f"{self._path}/{label}: the sequence's connector outcome {connector!r} is not an "
                 f"outcome of the state; its outcomes: {', '.join(state.get_registered_outcomes())}"
             )
-        given = dict(transitions or {})
-        return self._add(label, state, given, remapping, constants, [connector])
+        return [connector]

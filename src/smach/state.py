@@ -13,15 +13,13 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
+from smach.events import EventBus, PreemptRequested, PreemptServiced, stamp
 from smach.exceptions import InvalidStateError
-from smach.introspection.events import EventBus, PreemptRequested, PreemptServiced, stamp
+from smach.runtime import Runtime
 from smach.user_data import UserData
 from smach.util import has_smach_interface, key_list
-
-if TYPE_CHECKING:
-    from smach.container import Container
 
 __all__ = ["CBState", "State"]
 
@@ -35,9 +33,12 @@ class State:
 
     # Where the state sits in a tree (set when a container adopts it); class-level
     # defaults keep construction cheap for states that are never watched.
-    _bus: EventBus = EventBus()
+    _rt: Runtime = Runtime()
     _path: str = ""
-    _parent: Container | None = None
+    _parent: State | None = None
+    # Made on first use (preempt_event, sleep): most states never wait on it, and an
+    # instance keeps its attributes inline only up to 29 (see docs/performance.md).
+    _preempt_event: threading.Event | None = None
 
     def __init__(
         self,
@@ -55,7 +56,6 @@ class State:
             dict.fromkeys(key_list(output_keys, "output_keys") + io) if output_keys or io else {}
         )
         self._preempt_requested = False
-        self._preempt_event: threading.Event | None = None
 
     def execute(self, ud: UserData) -> str | None:
         """Do the state's work and return one of its registered outcomes."""
@@ -111,20 +111,22 @@ class State:
         event = self._preempt_event
         if event is not None:
             event.set()
-        self._bus.preempt_seen = True
-        if self._bus.listeners:
+        rt = self._rt
+        rt.preempt_seen = True
+        if rt.bus.listeners:
             t, thread = stamp()
-            self._bus.emit(PreemptRequested(path=self._path, time=t, thread=thread))
-        control = self._bus.control
+            rt.bus.emit(PreemptRequested(path=self._path, time=t, thread=thread))
+        control = rt.control
         if control is not None:
             control.wake()  # a state held by a pause starts when preempted
 
     def service_preempt(self) -> None:
         """Acknowledge a preempt request: "I stopped because of it"."""
         self._clear_preempt()
-        if self._bus.listeners:
+        bus = self._rt.bus
+        if bus.listeners:
             t, thread = stamp()
-            self._bus.emit(PreemptServiced(path=self._path, time=t, thread=thread))
+            bus.emit(PreemptServiced(path=self._path, time=t, thread=thread))
 
     def recall_preempt(self) -> None:
         """Withdraw a preempt request (used by containers)."""
@@ -178,10 +180,24 @@ class State:
         self._preempt_event = None
 
     # -- tree membership ------------------------------------------------------------
-    def _adopt(self, bus: EventBus, path: str) -> None:
-        """Attach this state to a tree: its events go to ``bus`` under ``path``."""
-        self._bus = bus
+    def _attach(self, runtime: Runtime, path: str) -> None:
+        """Join a tree: this state's events go to ``runtime.bus`` under ``path``.
+
+        Containers call it when they adopt a child (``Container.adopt_child``).
+        """
+        self._rt = runtime
         self._path = path
+
+    def _detach(self) -> None:
+        """Leave the tree (a container replaced this child): no parent, no listeners."""
+        self._parent = None
+        self._rt = State._rt
+        self._path = ""
+
+    @property
+    def _bus(self) -> EventBus:
+        """The event bus of the tree this state belongs to (``self._rt.bus``)."""
+        return self._rt.bus
 
     @property
     def path(self) -> str:

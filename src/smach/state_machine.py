@@ -15,30 +15,22 @@ from __future__ import annotations
 import threading
 import time
 from collections.abc import Iterable, Mapping, Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import smach
 from smach.container import Container, construction_method
+from smach.events import Capture, StateExited, Transition
 from smach.exceptions import (
     InvalidOutcomeError,
     InvalidStateError,
     InvalidTransitionError,
     InvalidUserCodeError,
 )
-from smach.introspection.events import (
-    Capture,
-    EventBus,
-    StateEntered,
-    StateExited,
-    Transition,
-)
+from smach.runtime import Runtime
 from smach.state import State
 from smach.user_data import Remapper, UserData
 from smach.util import is_shutdown as _never
 from smach.util import key_list
-
-if TYPE_CHECKING:
-    from smach.control import Controller
 
 __all__ = ["StateMachine"]
 
@@ -88,7 +80,7 @@ class StateMachine(Container):
         self._last_added: tuple[str, list[str]] | None = None
         self._current_slot: _Slot | None = None
         self._preempt_lock = threading.Lock()
-        # The compiled slots by label, and the initial state's slot (set by _compile).
+        # The compiled slots by label, and the initial state's slot (set by compile_children).
         self._slots: tuple[dict[str, _Slot], _Slot] | None = None
         # The last run's final state and its outcome (terminal states, the log line).
         self._last_exit: tuple[str, str | None] = ("", None)
@@ -109,9 +101,15 @@ class StateMachine(Container):
         or ``None`` (fall through: the container returns the same outcome). Outcomes
         not listed fall through. ``remapping`` maps state key -> container key;
         ``constants`` are written into the container's userdata before every
-        execution of this state.
+        execution of this state. (In a :class:`~smach.sequence.Sequence`, the state
+        also leads to the next one added on the sequence's connector outcome.)
         """
-        return self._add(label, state, transitions, remapping, constants, ())
+        connectors = self._connectors(label, state)
+        return self._add(label, state, transitions, remapping, constants, connectors)
+
+    def _connectors(self, label: str, state: State) -> Sequence[str]:
+        """The outcomes of ``state`` that ``add`` links to the next state added (none)."""
+        return ()
 
     @construction_method
     def add_auto(
@@ -153,7 +151,7 @@ class StateMachine(Container):
         given = dict(transitions) if transitions else {}
         if given and isinstance(state, State):
             self.check_state_spec(label, state, given)
-        self._adopt_child(label, state)
+        self.adopt_child(label, state)
         table: dict[str, str | None] = dict.fromkeys(state._outcomes)
         table.update(given)
         if self._last_added is not None:
@@ -244,12 +242,12 @@ class StateMachine(Container):
                     )
         return problems
 
-    def _compile(self) -> None:
+    def compile_children(self) -> None:
         slots = {
             label: _Slot(
                 label,
                 state,
-                self._remapper(label, state, self._remappings[label]),
+                self.child_remapper(label, state, self._remappings[label]),
                 self._constants[label],
                 f"{self._path}/{label}",
             )
@@ -267,22 +265,30 @@ class StateMachine(Container):
         self._slots = (slots, slots[self._initial_state_label])
 
     # -- execution -------------------------------------------------------------------------------
-    def _run(self) -> str | None:
-        """The transition loop: run the current state, follow its outcome's transition."""
+    def run_children(self) -> str | None:
+        """The transition loop: run the current state, follow its outcome's transition.
+
+        A step that somebody watches (listeners, runtime control, log lines) or that
+        has a preempt request to pass on goes through :meth:`Container.step_child`;
+        an unwatched one calls the child directly, which is all ``step_child`` would
+        do for it.
+        """
         slot = self._slots[1]  # type: ignore[index]  # (compiled before every run)
         label = ""
         # With capture listeners only, the state_exited + transition of a step are held
         # until the next state is entered (nothing else happens in between in this
-        # thread) and the three go out in one call; anything else releases them first.
-        held: Capture | None = None  # the state_exited; held_move: the transition
-        held_move: Capture = ()
-        bus = self._bus
+        # thread) and the three go out in one call (see step_child's ``pending``).
+        pending: tuple[Capture, ...] = ()
+        bus = self._rt.bus
         # Read once per run: the thread's name (set by execute() when somebody
         # listens; every event of this loop is emitted from it) and whether INFO lines
         # are wanted (decided once per top-level run).
         thread = self._thread
         log = self._log_info
-        control: Controller | None = None
+        # Log lines alone take a step through step_child only if this machine writes
+        # a line when a state is entered (StateMachine writes none, as the original).
+        log_steps = log and self._logs_entries
+        watched: object = False
         if self._preempted_state is not None:
             self._preempted_state = None
         try:
@@ -291,96 +297,92 @@ class StateMachine(Container):
             while True:
                 label = slot.label
                 self._current_slot = slot  # publish before reading the flag (see module doc)
-                if self._preempt_requested:
-                    if held is not None:
-                        self._release((held, held_move))
-                        held = None
-                    self._handle_preempt(slot.state)
                 if slot.constants:
                     self._userdata._data.update(slot.constants)
-                observed = bus.listeners or self._local
-                if observed:
-                    # Runtime control (smach.control): a controller is one of the tree's
-                    # listeners, so an unobserved step never looks for it.
-                    control = bus.control
-                    if control is not None:
-                        if held is not None:  # the page/journal see the transition while held
-                            self._release((held, held_move))
-                            held = None
-                        control.enter(self, slot.path, slot.state)
-                    if thread is None:
-                        thread = threading.current_thread().name
-                    if bus.event_listeners or self._local:
-                        if held is not None:
-                            self._release((held, held_move))
-                            held = None
-                        self._emit_entered(label, thread)
-                    else:  # capture listeners only (journal, viewer): _emit_entered inlined
-                        capture = (StateEntered, slot.path, _monotonic(), thread, label)
-                        if held is None:
-                            bus.capture(capture)
-                        else:
-                            self._release((held, held_move, capture))
-                            held = None
-                try:
+                watched = bus.listeners or self._local
+                if watched or log_steps or self._preempt_requested:
+                    if thread is None and watched:
+                        thread = _current_thread().name
+                    held, pending = pending, ()  # (step_child sends them, even if it raises)
                     # Typed str: anything else fails the lookup below and is reported.
-                    outcome: str = slot.state.execute(slot.remapper)  # type: ignore[assignment]
-                except Exception as exc:
-                    if observed and control is not None:
-                        control.leave(slot.path, slot.state, None)
-                    raise self._child_error(label, slot.state, exc) from exc
-                if observed and control is not None:  # a forced outcome replaces the returned one
-                    outcome = control.leave(slot.path, slot.state, outcome)  # type: ignore[assignment]
+                    outcome = self.step_child(
+                        label, slot.state, slot.remapper, thread, held, check=False,
+                        report_exit=False,
+                    )  # fmt: skip
+                else:
+                    try:
+                        outcome = slot.state.execute(slot.remapper)  # type: ignore[assignment]
+                    except Exception as exc:
+                        raise self._child_error(label, slot.state, exc) from exc
                 try:
                     target = slot.next[outcome]
                 except (KeyError, TypeError):
-                    if outcome is None and smach.is_shutdown():
-                        return None
-                    raise self._missing_transition(slot, outcome) from None
-                if target.__class__ is _Slot:
-                    if observed:
-                        if bus.event_listeners or self._local:
-                            self._emit_step(slot, outcome, target, thread)
-                        else:  # capture listeners only: _emit_step inlined, held
-                            t = _monotonic()
-                            held = (StateExited, slot.path, t, thread, label, outcome)
-                            held_move = (
-                                Transition,
-                                self._path,
-                                t,
-                                thread,
-                                label,
-                                outcome,
-                                target.label,
-                            )
-                    if log:
-                        smach.loginfo(
-                            f"State machine transitioning '{label}':'{outcome}'-->'{target.label}'"
-                        )
-                    # The default check never says yes; skip the call unless replaced.
-                    if smach.is_shutdown is not _never and smach.is_shutdown():
-                        if held is not None:
-                            self._release((held, held_move))
-                        return None
-                    slot = target
-                    continue
-                if held is not None:  # listeners came or went during the run
-                    self._release((held, held_move))
-                    held = None
-                if observed:
-                    self._emit_exited(label, outcome, thread)
-                break
-            self._last_exit = (label, outcome)
-            if self._preempt_requested and not slot.state._preempt_requested:
-                self.service_preempt()
+                    self._no_transition(slot, outcome)  # (returns on shutdown)
+                    return None
+                if target.__class__ is not _Slot:
+                    break
+                if watched:
+                    pending = self._report_step(slot, outcome, target, thread)
+                elif log:  # (the line of _log_transition, without a call per transition)
+                    smach.loginfo(
+                        f"State machine transitioning '{label}':'{outcome}'-->'{target.label}'"
+                    )
+                # The default check never says yes; skip the call unless replaced.
+                if smach.is_shutdown is not _never and smach.is_shutdown():
+                    return None
+                slot = target
+            if pending or watched or self._preempt_requested:
+                pending = self._end_run(slot, outcome, thread, pending)
+            else:  # (what _end_run comes to when nobody watches and nothing is pending)
+                self._last_exit = (label, outcome)
             # Not a slot, so a container outcome (a str).
             return target  # type: ignore[return-value]
-        except BaseException:
-            if held is not None:
-                self._release((held, held_move))
-            raise
         finally:
+            if pending:
+                self._release(pending)
             self._current_slot = None
+
+    def _end_run(
+        self, slot: _Slot, outcome: str, thread: str | None, pending: tuple[Capture, ...]
+    ) -> tuple[Capture, ...]:
+        """The last state returned ``outcome``, a container outcome: report its exit,
+        service our preempt request if it did. Returns ``()`` (``pending`` sent)."""
+        if pending:  # (listeners came or went during the run)
+            self._release(pending)
+        label = slot.label
+        if self._rt.bus.listeners or self._local:
+            self._emit_exited(label, outcome, thread)
+        self._last_exit = (label, outcome)
+        if self._preempt_requested and not slot.state._preempt_requested:
+            self.service_preempt()
+        return ()
+
+    def _no_transition(self, slot: _Slot, outcome: object) -> None:
+        """``outcome`` of ``slot`` has no transition: raise the error, unless smach is
+        shutting down (the state returned None; the machine then returns None)."""
+        if outcome is None and smach.is_shutdown():
+            return
+        raise self._missing_transition(slot, outcome) from None
+
+    def _report_step(
+        self, slot: _Slot, outcome: str, target: _Slot, thread: str | None
+    ) -> tuple[Capture, ...]:
+        """Report the exit of ``slot`` and the transition to ``target``: returns them held
+        (for the next ``state_entered``) when only capture listeners listen."""
+        bus = self._rt.bus
+        held: tuple[Capture, ...] = ()
+        if bus.event_listeners or self._local:
+            self._emit_step(slot, outcome, target, thread)
+        elif bus.sinks:
+            t = _monotonic()
+            label = slot.label
+            held = (
+                (StateExited, slot.path, t, thread, label, outcome),
+                (Transition, self._path, t, thread, label, outcome, target.label),
+            )
+        if self._log_info:
+            self._log_transition(slot.label, outcome, target.label)
+        return held
 
     def _start_states(self) -> list[str]:
         # (Never None during a run: the consistency check saw to it.)
@@ -389,15 +391,6 @@ class StateMachine(Container):
     def _terminal_states(self) -> list[str]:
         return [self._last_exit[0]]
 
-    def _release(self, held: tuple[Capture, ...]) -> None:
-        """Send held captures (state_exited + transition [+ state_entered]) in one call."""
-        bus = self._bus
-        for sink in bus.batch_sinks:
-            try:
-                sink(held)
-            except Exception as exc:
-                bus.sink_failed(sink, exc)
-
     def _emit_step(self, slot: _Slot, outcome: str, target: _Slot, thread: str | None) -> None:
         """``state_exited`` of ``slot`` then the ``transition`` to ``target`` (one time)."""
         t = _monotonic()
@@ -405,7 +398,7 @@ class StateMachine(Container):
             thread = _current_thread().name
         label = slot.label
         path = self._path
-        bus = self._bus
+        bus = self._rt.bus
         if bus.batch_sinks:
             pair = (
                 (StateExited, slot.path, t, thread, label, outcome),
@@ -435,12 +428,10 @@ class StateMachine(Container):
         else:
             self._current_slot = target
 
-    def _adopt(self, bus: EventBus, path: str) -> None:
-        super()._adopt(bus, path)
-        for slot in (
-            self._slots[0].values() if self._slots else ()
-        ):  # they hold the children's paths
-            slot.path = f"{path}/{slot.label}"
+    def _attach(self, runtime: Runtime, path: str) -> None:
+        super()._attach(runtime, path)
+        for slot in self._slots[0].values() if self._slots else ():
+            slot.path = f"{path}/{slot.label}"  # (slots hold the children's paths)
 
     def _missing_transition(self, slot: _Slot, outcome: object) -> InvalidUserCodeError:
         if outcome in slot.state.get_registered_outcomes():
@@ -471,7 +462,7 @@ class StateMachine(Container):
             self._preempted_state = state
         state.request_preempt()
 
-    def _handle_preempt(self, state: State) -> None:
+    def _forward_preempt(self, state: State) -> None:
         """Before running ``state`` with our flag set: let the request flow or stop it."""
         previous = self._preempted_state
         if previous is None or previous._preempt_requested:

@@ -15,8 +15,8 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from smach.events import Event
 from smach.exceptions import InvalidStateError
-from smach.introspection.events import Event
 from smach.state import State
 from smach.user_data import UserData
 

@@ -12,18 +12,17 @@ from __future__ import annotations
 
 import copy
 from collections.abc import Iterable, Iterator, Mapping
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import Any, ClassVar
 
+from smach.events import EventBus, UserdataWritten, stamp
 from smach.exceptions import InvalidUserCodeError, UndeclaredKeyError, UserDataKeyError
-from smach.introspection.events import UserdataWritten, stamp
-from smach.introspection.summary import frozen
+from smach.summary import frozen
 
-if TYPE_CHECKING:
-    from smach.state import State
+__all__ = ["MISSING", "Const", "Remapper", "UserData", "get_const", "make_remapper"]
 
-__all__ = ["Const", "Remapper", "UserData", "get_const", "make_remapper"]
-
-_MISSING = object()
+MISSING: Any = object()
+"""What :meth:`UserData._take` returns for a key that has no value."""
+_MISSING = MISSING
 
 
 class UserData:
@@ -80,6 +79,11 @@ class UserData:
 
     def keys(self) -> list[str]:
         return list(self._data)
+
+    def _take(self, key: str) -> Any:
+        """The value of ``key`` as stored (:data:`MISSING` if none): for copying between
+        scopes (a container's input keys), never wrapped read-only."""
+        return self._data.get(key, MISSING)
 
     def update(self, other: UserData | Mapping[str, Any]) -> None:
         """Merge another userdata (or a mapping) into this one, overwriting."""
@@ -167,9 +171,13 @@ class Remapper(UserData):
     ``remapping`` maps state-local key -> container key. Reading a key that is not a
     declared input key, or writing one that is not a declared output key, raises
     :class:`InvalidUserCodeError` naming the state and its declared keys.
+
+    ``path`` is the container's path and ``writer`` the state's label (for error
+    messages, and for the ``userdata_written`` events that go to ``bus`` when it has
+    listeners). ``owner`` (a container) is the older way to give both path and bus.
     """
 
-    __slots__ = ("_d", "_in", "_out", "_owner", "_remap", "_rw", "_ud", "_writer")
+    __slots__ = ("_bus", "_d", "_in", "_out", "_path", "_remap", "_rw", "_ud", "_writer")
 
     _ud: UserData
     _d: dict[str, Any] | None
@@ -177,7 +185,8 @@ class Remapper(UserData):
     _out: frozenset[str]
     _rw: frozenset[str]
     _remap: dict[str, str]
-    _owner: State | None
+    _path: str
+    _bus: EventBus | None
     _writer: str
     #: Fast subclasses (make_remapper): declared output key -> container key.
     _writes: ClassVar[dict[str, str]] = {}
@@ -189,8 +198,10 @@ class Remapper(UserData):
         output_keys: Iterable[str] = (),
         remapping: Mapping[str, str] | None = None,
         *,
-        owner: State | None = None,
+        path: str = "",
+        bus: EventBus | None = None,
         writer: str = "",
+        owner: Any = None,
     ) -> None:
         set_ = object.__setattr__
         set_(self, "_ud", ud)
@@ -201,8 +212,16 @@ class Remapper(UserData):
         set_(self, "_out", frozenset(output_keys))
         set_(self, "_rw", self._in & self._out)
         set_(self, "_remap", dict(remapping) if remapping else {})
-        set_(self, "_owner", owner)
         set_(self, "_writer", writer)
+        self._retarget(*_where(path, bus, owner))
+
+    def _retarget(self, path: str, bus: EventBus | None) -> None:
+        """Name the container (``path``) and the bus that writes are reported to.
+
+        A container calls it on the views it built when it joins another tree.
+        """
+        object.__setattr__(self, "_path", path)
+        object.__setattr__(self, "_bus", bus)
 
     @property
     def _data(self) -> dict[str, Any]:  # type: ignore[override]
@@ -210,8 +229,8 @@ class Remapper(UserData):
         return self._ud._data
 
     def _who(self) -> str:
-        if self._owner is not None and self._writer:
-            return f"state {self._owner._path}/{self._writer}"
+        if self._path and self._writer:
+            return f"state {self._path}/{self._writer}"
         return f"state {self._writer!r}" if self._writer else "this state"
 
     def _read(self, key: str) -> Any:
@@ -245,25 +264,22 @@ class Remapper(UserData):
             self._ud[target] = value
         else:
             self._d[target] = value
-        owner = self._owner
-        if owner is not None and owner._bus.listeners:
-            self._written(target, value)
+        bus = self._bus
+        if bus is not None and bus.listeners:
+            self._written(bus, target, value)
 
-    def _written(self, target: str, value: Any) -> None:
+    def _written(self, bus: EventBus, target: str, value: Any) -> None:
         """Tell the tree's listeners that ``target`` of the container was written."""
-        owner = self._owner
-        assert owner is not None
         t, thread = stamp()
-        bus = owner._bus
         if bus.sinks:
             # Captures hold values that cannot change: a mutable one as it is now.
             bus.capture(
-                (UserdataWritten, owner._path, t, thread, target, frozen(value), self._writer)
+                (UserdataWritten, self._path, t, thread, target, frozen(value), self._writer)
             )
         if bus.event_listeners:
             bus.deliver(
                 UserdataWritten(
-                    path=owner._path,
+                    path=self._path,
                     time=t,
                     thread=thread,
                     key=target,
@@ -271,6 +287,14 @@ class Remapper(UserData):
                     writer=self._writer,
                 )
             )
+
+    def _take(self, key: str) -> Any:
+        # A key this view does not declare as an input has no value for the copier.
+        if key not in self._in:
+            return MISSING
+        target = self._remap.get(key, key)
+        data = self._d
+        return self._ud._take(target) if data is None else data.get(target, MISSING)
 
     def __getattr__(self, name: str) -> Any:
         if name.startswith("__"):
@@ -335,6 +359,9 @@ _REMAPPER_CACHE: dict[
 ] = {}
 
 
+_NO_REMAP: dict[str, str] = {}
+
+
 def _fast_setattr(self: Remapper, name: str, value: Any) -> None:
     # One Python call per write: the declared output keys of this class are in
     # _writes (state key -> container key); anything else takes the slow path.
@@ -346,9 +373,9 @@ def _fast_setattr(self: Remapper, name: str, value: Any) -> None:
             self._write(name, value)  # remapped non-identifier key, or the undeclared-key error
         return
     self._d[target] = value  # type: ignore[index]
-    owner = self._owner
-    if owner is not None and owner._bus.listeners:
-        self._written(target, value)
+    bus = self._bus
+    if bus is not None and bus.listeners:
+        self._written(bus, target, value)
 
 
 def _key_property(key: str, target: str, const: bool) -> property:
@@ -372,13 +399,19 @@ def make_remapper(
     output_keys: Iterable[str],
     remapping: Mapping[str, str] | None = None,
     *,
-    owner: State | None = None,
+    path: str = "",
+    bus: EventBus | None = None,
     writer: str = "",
+    owner: Any = None,
 ) -> Remapper:
     """A :class:`Remapper` with fast attribute access to the declared keys."""
-    remap = dict(remapping) if remapping else {}
+    # (Views without a remapping share one empty dict, never written: a fresh tree's
+    # first run touches one object less per child.)
+    remap = dict(remapping) if remapping else _NO_REMAP
     if isinstance(ud, Remapper):
-        return Remapper(ud, input_keys, output_keys, remap, owner=owner, writer=writer)
+        return Remapper(
+            ud, input_keys, output_keys, remap, path=path, bus=bus, writer=writer, owner=owner
+        )
     # Keyed on the declaration as given (tuples, as State reports them): no sets are
     # built for an interface seen before. Many states of a machine share one.
     key = (tuple(input_keys), tuple(output_keys), tuple(remap.items()))
@@ -394,9 +427,16 @@ def make_remapper(
     set_(view, "_out", outs)
     set_(view, "_rw", rw)
     set_(view, "_remap", remap)
-    set_(view, "_owner", owner)
     set_(view, "_writer", writer)
+    view._retarget(*_where(path, bus, owner))
     return view
+
+
+def _where(path: str, bus: EventBus | None, owner: Any) -> tuple[str, EventBus | None]:
+    """The container path and bus of a view, from an ``owner`` state if one is given."""
+    if owner is not None:
+        return owner.path, owner._rt.bus
+    return path, bus
 
 
 def _remapper_class(

@@ -14,8 +14,11 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Literal
 
 if TYPE_CHECKING:
+    import networkx as nx
+
     from smach.container import Container
     from smach.state import State
+    from smach.state_machine import StateMachine
 
 __all__ = ["Issue", "ValidationReport", "validate"]
 
@@ -121,6 +124,22 @@ def _check_graph(sm: Container, report: ValidationReport) -> None:
     if initial not in states:
         return
     reachable = nx.descendants(graph, initial) | {initial}
+    _check_reach(sm, graph, initial, reachable, outcome_nodes, report)
+    _check_inputs(sm, graph, reachable, report)
+
+
+def _check_reach(
+    sm: StateMachine,
+    graph: nx.DiGraph[object],
+    initial: str,
+    reachable: set[object],
+    outcome_nodes: dict[str, tuple[str, str]],
+    report: ValidationReport,
+) -> None:
+    """Unreachable states, states that cannot finish, outcomes never returned."""
+    import networkx as nx
+
+    states = sm.get_children()
     for label in states:
         if label not in reachable:
             report.issues.append(
@@ -146,8 +165,16 @@ def _check_graph(sm: Container, report: ValidationReport) -> None:
             report.issues.append(
                 Issue("warning", sm.path, f"container outcome {outcome!r} is never returned")
             )
-    # Input keys: provided by the container's inputs, its userdata, constants, or a
-    # state that can run before the reader.
+
+
+def _check_inputs(
+    sm: StateMachine, graph: nx.DiGraph[object], reachable: set[object], report: ValidationReport
+) -> None:
+    """Input keys: provided by the container's inputs, its userdata, constants, or a
+    state that can run before the reader."""
+    import networkx as nx
+
+    states = sm.get_children()
     available = _available(sm)
     for consts in sm._constants.values():
         available |= set(consts)

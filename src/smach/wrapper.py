@@ -58,7 +58,7 @@ class Wrapper(Container):
                 f"{self._path}: a {type(self).__name__} holds one child; "
                 f"{self._label!r} was already added"
             )
-        self._adopt_child(label, state)
+        self.adopt_child(label, state)
         self._label, self._child = label, state
         self._remapping = dict(remapping or {})
         infer_outcomes, infer_keys = self._infer
@@ -106,13 +106,13 @@ class Wrapper(Container):
         """Run the child once: events, exception wrapping and outcome checks included."""
         child, label, remapper = self._child, self._label, self._remapper_cache
         assert child is not None and label is not None and remapper is not None
-        return self._step(label, child, remapper)
+        return self.step_child(label, child, remapper)
 
-    def _compile(self) -> None:
+    def compile_children(self) -> None:
         assert self._child is not None and self._label is not None
-        self._remapper_cache = self._remapper(self._label, self._child, self._remapping)
+        self._remapper_cache = self.child_remapper(self._label, self._child, self._remapping)
 
-    def _run(self) -> str | None:
+    def run_children(self) -> str | None:
         child, label = self._child, self._label
         assert child is not None and label is not None
         outcome = self.run(child, label)

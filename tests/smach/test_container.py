@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import copy
 import threading
 
 import pytest
@@ -729,3 +730,38 @@ def test_capture_listeners_see_what_ordinary_listeners_see_in_the_same_order(
     events: list[ev.Event] = []
     run(events.append)
     assert [(c[0].kind, c[1]) for c in captures] == [(e.kind, e.path) for e in events]
+
+
+def test_input_and_output_keys_follow_whichever_parent_userdata_a_run_is_given() -> None:
+    def bump(ud: smach.UserData) -> str:
+        ud.x = ud.x + 1
+        return "done"
+
+    sm = smach.StateMachine(outcomes=["done"], input_keys=["x"], output_keys=["x"])
+    sm.add("BUMP", smach.CBState(bump, outcomes=["done"], io_keys=["x"]))
+    first, second = smach.UserData({"x": 1}), smach.UserData({"x": 10})
+    for parent in (first, second, first):
+        assert sm.execute(parent) == "done"
+    assert (first.x, second.x) == (3, 11)
+    outer = smach.StateMachine(outcomes=["done"])
+    outer.userdata.x = 100
+    outer.add("INNER", sm, remapping={"x": "x"})
+    assert outer.execute() == "done"
+    assert outer.userdata.x == 101
+
+
+def test_a_tree_that_passed_keys_down_can_be_deep_copied_and_the_copy_runs() -> None:
+    def bump(ud: smach.UserData) -> str:
+        ud.x = ud.x + 1
+        return "done"
+
+    inner = smach.StateMachine(outcomes=["done"], input_keys=["x"], output_keys=["x"])
+    inner.add("BUMP", smach.CBState(bump, outcomes=["done"], io_keys=["x"]))
+    outer = smach.StateMachine(outcomes=["done"], input_keys=["x"], output_keys=["x"])
+    outer.add("INNER", inner)
+    parent = smach.UserData({"x": 1})
+    assert outer.execute(parent) == "done"
+    twin = copy.deepcopy(outer)
+    other = smach.UserData({"x": 10})
+    assert twin.execute(other) == "done"
+    assert (parent.x, other.x) == (2, 11)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import logging
+
 import pytest
 from smach_helpers import Leaf
 
@@ -97,3 +99,46 @@ def test_loggers_without_listeners_write_lines_and_build_no_event(
         smach.log.restore_default_loggers()
     assert "State machine transitioning 'A':'next'-->'B'" in lines
     assert sum(line.startswith("Iterating item") for line in lines) == 2
+
+
+def test_a_python_logger_dropping_info_installed_as_loggers_gets_no_line_formatted(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    def no_line(*args: object, **kwargs: object) -> None:
+        raise AssertionError("a log line was formatted for a logger that drops INFO")
+
+    for name in ("_log_started", "_log_transition", "_log_terminated"):
+        monkeypatch.setattr(smach.StateMachine, name, no_line)
+    logger = logging.getLogger("test_run_cost.robot")
+    logger.setLevel(logging.WARNING)
+    smach.set_loggers(logger.info, logger.warning, logger.debug, logger.error)
+    try:
+        assert not smach.log.info_enabled()
+        assert _nested(3)[0].execute() == "done"
+    finally:
+        smach.log.restore_default_loggers()
+
+
+def test_a_logger_whose_level_admits_info_or_cannot_tell_gets_the_lines() -> None:
+    class RosLikeLogger:  # an rclpy logger answers get_effective_level() (INFO is 20)
+        def __init__(self, level: int) -> None:
+            self.level = level
+            self.lines: list[str] = []
+
+        def get_effective_level(self) -> int:
+            return self.level
+
+        def info(self, msg: str) -> None:
+            self.lines.append(msg)
+
+    quiet, chatty = RosLikeLogger(30), RosLikeLogger(20)
+    plain: list[str] = []
+    try:
+        for info, expected in ((quiet.info, False), (chatty.info, True), (plain.append, True)):
+            smach.set_loggers(info, plain.append, plain.append, plain.append)
+            assert smach.log.info_enabled() is expected
+        smach.set_loggers(chatty.info, plain.append, plain.append, plain.append)
+        assert _nested(2)[0].execute() == "done"
+    finally:
+        smach.log.restore_default_loggers()
+    assert sum(line.startswith("State machine starting") for line in chatty.lines) == 2

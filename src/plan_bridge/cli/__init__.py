@@ -27,6 +27,7 @@ __all__ = ["MODULES", "Terminated", "build_parser", "commands", "main"]
 #: The subcommand modules, in the order ``plan-bridge --help`` lists their commands.
 MODULES = (
     "plan_bridge.cli.run",
+    "plan_bridge.cli.check",
     "plan_bridge.cli.control",
     "plan_bridge.cli.plan",
     "plan_bridge.cli.problem",

@@ -213,6 +213,14 @@ class Findings(list[str]):
         super().__init__(warnings)
         self.notes = list(notes)
 
+    def show(self) -> None:
+        """Print the warnings and notes on stderr, one ``warning: ...`` or ``note: ...``
+        a line."""
+        for warning in self:
+            progress(f"warning: {warning}")
+        for note in self.notes:
+            progress(f"note: {note}")
+
 
 def check_input(domain: Path, problem: Path, goal: str | None = None) -> Findings:
     """The front end's verdict on one domain and problem, the same for every command:

@@ -30,6 +30,8 @@ from __future__ import annotations
 import argparse
 import re
 import sys
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -62,8 +64,6 @@ def apply_command(knowledge: KnowledgeBase, line: str, *, source: str = "api") -
     :class:`~plan_bridge.pddl.knowledge.KnowledgeError` for a change the knowledge base
     refuses (both ValueErrors).
     """
-    from plan_bridge.pddl.knowledge import function_atom, goal_atoms, value_assignments
-
     text = re.split(r"[#;]", line, maxsplit=1)[0].strip()
     if not text:
         return None
@@ -74,45 +74,82 @@ def apply_command(knowledge: KnowledgeBase, line: str, *, source: str = "api") -
         return "quit"
     if verb in _IGNORED:
         return f"'{text}' skipped: the import builds the problem only"
-    if verb not in ("set", "remove") or what not in ("instance", "predicate", "function", "goal"):
+    change = _CHANGES.get(what)
+    if verb not in ("set", "remove") or change is None:
         raise CommandError(f"unknown command {text!r}; commands: {_COMMANDS}")
-    if what == "instance":
-        names = rest.split()
-        if verb == "set" and len(names) == 3 and names[1] == "-":
-            names = [names[0], names[2]]
-        if len(names) != (2 if verb == "set" else 1):
-            usage = "set instance NAME TYPE" if verb == "set" else "remove instance NAME"
-            raise CommandError(
-                f"{text!r}: expected {usage}, e.g. {usage.replace('NAME', 'leia').replace('TYPE', 'robot')}"
-            )
-        if verb == "set":
-            knowledge.add_instance(names[0], names[1], source=source)
-        else:
-            knowledge.remove_instance(names[0], cascade=True, source=source)
-    elif what == "predicate":
-        if not rest:
-            raise CommandError(
-                f"{text!r}: expected {verb} predicate (ATOM), e.g. (robot_at leia kitchen)"
-            )
-        atoms = goal_atoms(rest) if rest.startswith("(") else [tuple(rest.lower().split())]
-        if verb == "set":
-            knowledge.add_facts(atoms, source=source)
-        else:
-            knowledge.remove_facts(atoms, source=source)
-    elif what == "function":
-        if verb == "set":
-            knowledge.set_values(value_assignments(rest), source=source)
-        else:
-            knowledge.remove_value(function_atom(rest), source=source)
-    elif verb == "set":
-        if not rest:
-            raise CommandError(f"{text!r}: expected set goal (and (ATOM) ...)")
-        knowledge.set_goal(rest, source=source)
-    elif rest:
-        knowledge.remove_goal(rest, source=source)
-    else:
-        knowledge.clear_goal(source=source)
+    change(knowledge, _Line(text, verb == "set", rest, source))
     return None
+
+
+@dataclass(frozen=True)
+class _Line:
+    """A ``set ...`` or ``remove ...`` command: the text, which of the two, what follows
+    ``set WHAT`` and where the line is (for the knowledge base's record)."""
+
+    text: str
+    is_set: bool
+    rest: str
+    source: str
+
+
+def _instance(knowledge: KnowledgeBase, line: _Line) -> None:
+    names = line.rest.split()
+    if line.is_set and len(names) == 3 and names[1] == "-":
+        names = [names[0], names[2]]
+    if len(names) != (2 if line.is_set else 1):
+        usage = "set instance NAME TYPE" if line.is_set else "remove instance NAME"
+        raise CommandError(
+            f"{line.text!r}: expected {usage}, e.g. {usage.replace('NAME', 'leia').replace('TYPE', 'robot')}"
+        )
+    if line.is_set:
+        knowledge.add_instance(names[0], names[1], source=line.source)
+    else:
+        knowledge.remove_instance(names[0], cascade=True, source=line.source)
+
+
+def _predicate(knowledge: KnowledgeBase, line: _Line) -> None:
+    from plan_bridge.pddl.knowledge import goal_atoms
+
+    rest = line.rest
+    if not rest:
+        verb = "set" if line.is_set else "remove"
+        raise CommandError(
+            f"{line.text!r}: expected {verb} predicate (ATOM), e.g. (robot_at leia kitchen)"
+        )
+    atoms = goal_atoms(rest) if rest.startswith("(") else [tuple(rest.lower().split())]
+    if line.is_set:
+        knowledge.add_facts(atoms, source=line.source)
+    else:
+        knowledge.remove_facts(atoms, source=line.source)
+
+
+def _function(knowledge: KnowledgeBase, line: _Line) -> None:
+    from plan_bridge.pddl.knowledge import function_atom, value_assignments
+
+    if line.is_set:
+        knowledge.set_values(value_assignments(line.rest), source=line.source)
+    else:
+        knowledge.remove_value(function_atom(line.rest), source=line.source)
+
+
+def _goal(knowledge: KnowledgeBase, line: _Line) -> None:
+    if line.is_set:
+        if not line.rest:
+            raise CommandError(f"{line.text!r}: expected set goal (and (ATOM) ...)")
+        knowledge.set_goal(line.rest, source=line.source)
+    elif line.rest:
+        knowledge.remove_goal(line.rest, source=line.source)
+    else:
+        knowledge.clear_goal(source=line.source)
+
+
+#: What ``set WHAT`` and ``remove WHAT`` change.
+_CHANGES: dict[str, Callable[[KnowledgeBase, _Line], None]] = {
+    "instance": _instance,
+    "predicate": _predicate,
+    "function": _function,
+    "goal": _goal,
+}
 
 
 def _configure(parser: argparse.ArgumentParser) -> None:

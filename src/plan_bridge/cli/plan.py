@@ -5,12 +5,14 @@ from __future__ import annotations
 
 import argparse
 import json
+from typing import TYPE_CHECKING
 
 from plan_bridge.cli.base import (
     EXIT_FAILED,
     EXIT_OK,
     Command,
     InputError,
+    PddlInput,
     add_input_arguments,
     check_input,
     fail,
@@ -18,6 +20,10 @@ from plan_bridge.cli.base import (
     progress,
     resolve_input,
 )
+
+if TYPE_CHECKING:
+    from plan_bridge.pddl.task import PlanningTask
+    from plan_bridge.planning.types import Planner, PlanResult
 
 # -- plan ------------------------------------------------------------------------
 
@@ -52,66 +58,18 @@ def _run_plan(args: argparse.Namespace) -> int:
         chosen = resolve_input(args)
         domain, problem = chosen.domain, chosen.problems[0]
         goal = args.goal if chosen.world is None else None  # a world's goal: checked on load
-        findings = check_input(domain, problem, goal)
-        for warning in findings:
-            progress(f"warning: {warning}")
-        for note in findings.notes:
-            progress(f"note: {note}")
+        check_input(domain, problem, goal).show()
     except (InputError, PlanBridgeError) as exc:
         return fail(str(exc))
 
-    from plan_bridge.pddl.task import load_task
-    from plan_bridge.planning.planner import Planner, PlanStatus, get_planner
-    from plan_bridge.planning.worker import default_pool
+    from plan_bridge.planning.types import PlanStatus
 
-    planners: list[Planner] = []
     try:
         progress(f"loading {domain} and {problem}...")
-        # A planner process parses the task while we parse it (prime); the planner
-        # name is checked before our parse, so a wrong one is reported at once.
-        if chosen.world is not None:  # a pyrobosim world: the generated problem
-            from plan_bridge.missions.mission import load_target
-
-            task = load_target(
-                args.target,
-                problem,
-                goal=args.goal,
-                prime=default_pool(),
-                before_parse=lambda: planners.append(get_planner(args.planner)),
-            ).task
-        elif goal is not None:  # the goal given at run time, in place of the problem's
-            from plan_bridge.missions.given_goal import load_task_with_goal
-
-            task, given = load_task_with_goal(
-                domain,
-                problem,
-                goal,
-                prime=default_pool(),
-                before_parse=lambda: planners.append(get_planner(args.planner)),
-            )
-            goal = given.goal  # on one line, comments blanked: as `run` shows it
-        else:
-            task = load_task(
-                domain,
-                problem,
-                prime=default_pool(),
-                before_parse=lambda: planners.append(get_planner(args.planner)),
-            )
+        task, planner, goal = _load(args, chosen, goal)
+        shown = _engines_shown(planner, task)
     except PlanBridgeError as exc:
         return fail(str(exc))
-    planner = planners[0]
-    from plan_bridge.planning.engines import AutoPlanner, problem_kind
-
-    shown = planner.name
-    if isinstance(planner, AutoPlanner):
-        try:
-            engines = planner.engines(task)
-        except PlanBridgeError as exc:
-            return fail(str(exc))
-        shown = engines[0]
-        if not problem_kind(task).classical:
-            rest = f"; then {', '.join(engines[1:])} if it fails" if engines[1:] else ""
-            shown += f" ({problem_kind(task).name} problem{rest})"
     progress(f"planning with {shown} (timeout {args.timeout:g} s)...")
     try:
         result = planner.solve(task, timeout=args.timeout)
@@ -128,27 +86,80 @@ def _run_plan(args: argparse.Namespace) -> int:
             payload["goal"] = goal or " ".join(args.goal.split())
         print(json.dumps(payload, indent=None))
     else:
-        for warning in result.warnings:
-            progress(f"warning: {warning}")
-        if result.solved:
-            width = len(str(len(result.actions)))
-            for number, step in enumerate(result.actions, start=1):
-                timing = (
-                    f"{step.start:>8.3f}: " if step.start is not None else ""
-                )  # temporal plans: start time, then [duration]
-                length = f" [{step.duration:g}]" if step.duration is not None else ""
-                print(f"{number:>{width}}. {timing}{step}{length}")
-            makespan = "" if result.makespan is None else f", makespan {result.makespan:g} s"
-            print(
-                f"solved: {len(result.actions)} actions in {result.planning_time_s:.2f} s "
-                f"with {result.planner}{makespan}"
-            )
-        else:
-            print(
-                f"{result.status.value}: no plan after {result.planning_time_s:.2f} s with "
-                f"{result.planner}: {result.explanation}"
-            )
+        _print_result(result)
     return EXIT_OK if result.status is PlanStatus.SOLVED else EXIT_FAILED
+
+
+def _load(
+    args: argparse.Namespace, chosen: PddlInput, goal: str | None
+) -> tuple[PlanningTask, Planner, str | None]:
+    """The task, the planner and the goal given at run time (on one line, comments
+    blanked: as `run` shows it)."""
+    from plan_bridge.pddl.task import load_task
+    from plan_bridge.planning.planner import get_planner
+    from plan_bridge.planning.worker import default_pool
+
+    domain, problem = chosen.domain, chosen.problems[0]
+    planners: list[Planner] = []
+
+    # A planner process parses the task while we parse it (prime); the planner
+    # name is checked before our parse, so a wrong one is reported at once.
+    def choose() -> None:
+        planners.append(get_planner(args.planner))
+
+    if chosen.world is not None:  # a pyrobosim world: the generated problem
+        from plan_bridge.missions.mission import load_target
+
+        task = load_target(
+            args.target, problem, goal=args.goal, prime=default_pool(), before_parse=choose
+        ).task
+    elif goal is not None:  # the goal given at run time, in place of the problem's
+        from plan_bridge.missions.given_goal import load_task_with_goal
+
+        task, given = load_task_with_goal(
+            domain, problem, goal, prime=default_pool(), before_parse=choose
+        )
+        goal = given.goal
+    else:
+        task = load_task(domain, problem, prime=default_pool(), before_parse=choose)
+    return task, planners[0], goal
+
+
+def _engines_shown(planner: Planner, task: PlanningTask) -> str:
+    """The engine that plans first, with the others for ``auto``."""
+    from plan_bridge.planning.engines import AutoPlanner, problem_kind
+
+    if not isinstance(planner, AutoPlanner):
+        return planner.name
+    engines = planner.engines(task)
+    shown = engines[0]
+    if not problem_kind(task).classical:
+        rest = f"; then {', '.join(engines[1:])} if it fails" if engines[1:] else ""
+        shown += f" ({problem_kind(task).name} problem{rest})"
+    return shown
+
+
+def _print_result(result: PlanResult) -> None:
+    for warning in result.warnings:
+        progress(f"warning: {warning}")
+    if not result.solved:
+        print(
+            f"{result.status.value}: no plan after {result.planning_time_s:.2f} s with "
+            f"{result.planner}: {result.explanation}"
+        )
+        return
+    width = len(str(len(result.actions)))
+    for number, step in enumerate(result.actions, start=1):
+        timing = (
+            f"{step.start:>8.3f}: " if step.start is not None else ""
+        )  # temporal plans: start time, then [duration]
+        length = f" [{step.duration:g}]" if step.duration is not None else ""
+        print(f"{number:>{width}}. {timing}{step}{length}")
+    makespan = "" if result.makespan is None else f", makespan {result.makespan:g} s"
+    print(
+        f"solved: {len(result.actions)} actions in {result.planning_time_s:.2f} s "
+        f"with {result.planner}{makespan}"
+    )
 
 
 COMMANDS = (

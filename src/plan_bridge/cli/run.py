@@ -1,4 +1,4 @@
-"""The ``run`` and ``check`` subcommands of ``plan-bridge``.
+"""The ``run`` subcommand of ``plan-bridge`` (``check`` is in :mod:`.check`).
 
 Only argparse configuration happens at import time; everything heavy (unified-
 planning, smach, the domain's code) is imported when a command runs.
@@ -11,7 +11,7 @@ import contextlib
 import json
 import sys
 import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 from plan_bridge.cli.base import (
@@ -31,7 +31,9 @@ from plan_bridge.cli.progress import summary_text as _summary
 from plan_bridge.missions.runner import DEFAULT_FAIL_RATE
 
 if TYPE_CHECKING:
-    from plan_bridge.missions.mission import Target
+    from plan_bridge.missions.mission import MissionSetup, Target
+    from plan_bridge.missions.runner import Mission, MissionOptions
+    from plan_bridge.planning.types import Planner
 
 __all__ = ["ProgressPrinter"]
 
@@ -298,16 +300,70 @@ def _connect_robot(
 
 
 def _run_mission(args: argparse.Namespace, started: float, resources: Any = None) -> int:
-    from plan_bridge.missions.runner import MissionOptions, prepare_mission
+    from plan_bridge.missions.runner import prepare_mission
 
-    checkpoint: dict[str, Any] | None = None
+    resumed = _resume_point(args)
+    if isinstance(resumed, int):
+        return resumed
+    checkpoint = resumed
+    refusal = _refused_options(args) or _input_verdict(args)
+    if refusal is not None:
+        return refusal
+    target, planner = _load_target(args)
+    if args.snapshot and not _is_world(target):
+        return fail(f"--snapshot draws pyrobosim worlds only; {target.name} is not one")
+    start = _start_mission(args, target, resources)
+    mission = prepare_mission(target, start.options, setup=start.setup, planner=planner)
+    executive = mission.executive
+    if start.robot is not None:
+        # The mission's problem as a knowledge base, PlanSys2-style services on the
+        # executive's node (/knowledge/add_problem_goal, ...; docs/planning.md).
+        start.robot.serve_knowledge(mission.attach_knowledge())
+    if checkpoint is not None:
+        mission.resume(checkpoint)
+    if not args.quiet:
+        verb = "resuming" if args.resume else "run"
+        print(
+            f"plan-bridge {verb}: {target.name}, {target.problem_label} "
+            f"({start.skills_text}, seed {args.seed}, "
+            f"fail rate {mission.fail_rate:g}, planner {mission.planner.name})",
+            file=sys.stderr,
+            flush=True,
+        )
+        executive.add_listener(ProgressPrinter(sys.stderr, verbose=args.verbose))
+    journal = _open_journal(args, mission, target, checkpoint, start.robot)
+    viewer = _serve_viewer(args, mission, journal, resources)
+    outcome = mission.run()
+    _report_run(args, mission, target, outcome)
+    if viewer is not None and resources is not None:
+        # The mission is over, the page is not: keep it for whoever is looking, with
+        # the run's last events folded before saying so.
+        viewer.catch_up()
+        print(
+            f"viewer: {viewer.url} - the mission ended; still serving it, Ctrl-C to stop",
+            file=sys.stderr,
+            flush=True,
+        )
+        with contextlib.suppress(KeyboardInterrupt):
+            viewer.wait()
+    return EXIT_OK if executive.report.goal_reached else EXIT_FAILED
+
+
+def _resume_point(args: argparse.Namespace) -> dict[str, Any] | int | None:
+    """The checkpoint a ``--resume`` continues from (None: from the start), or the exit
+    code when the run cannot start."""
     if args.resume:
         resumed = _resume_arguments(args)
         if isinstance(resumed, int):
             return resumed
-        _, checkpoint = resumed
-    elif args.target is None:
+        return resumed[1]
+    if args.target is None:
         return fail("give a TARGET (a domain folder or a domain.pddl), or --resume RUN.jsonl")
+    return None
+
+
+def _refused_options(args: argparse.Namespace) -> int | None:
+    """The exit code for options that do not go together (None: they do)."""
     if not args.ros and (args.no_robot or args.ros_prefix):
         return fail("--no-robot and --ros-prefix need --ros")
     if args.ros and args.resume:
@@ -327,20 +383,26 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
         )
         if problem:
             return fail(problem)
+    return None
+
+
+def _input_verdict(args: argparse.Namespace) -> int | None:
+    """The same front-end verdict as `check` and `plan`, before anything heavy loads:
+    the exit code when the input is refused, else None (its warnings printed)."""
     try:
-        # The same front-end verdict as `check` and `plan`, before anything heavy loads.
         chosen = resolve_input(args)
         pddl_goal = args.goal if chosen.world is None else None  # a world's: checked on load
         input_warnings = check_input(chosen.domain, chosen.problems[0], pddl_goal)
     except InputError as exc:
         return fail(str(exc))
     if not args.quiet:
-        for warning in input_warnings:
-            print(f"warning: {warning}", file=sys.stderr, flush=True)
-        for note in input_warnings.notes:
-            print(f"note: {note}", file=sys.stderr, flush=True)
-    from plan_bridge.missions.mission import MissionSetup, load_target
-    from plan_bridge.planning.planner import Planner, get_planner
+        input_warnings.show()
+    return None
+
+
+def _load_target(args: argparse.Namespace) -> tuple[Target, Planner]:
+    from plan_bridge.missions.mission import load_target
+    from plan_bridge.planning.planner import get_planner
     from plan_bridge.planning.worker import default_pool
 
     planners: list[Planner] = []
@@ -354,8 +416,24 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
         goal=args.goal,
         events=args.events,
     )
-    if args.snapshot and not _is_world(target):
-        return fail(f"--snapshot draws pyrobosim worlds only; {target.name} is not one")
+    return target, planners[0]
+
+
+@dataclass
+class _Start:
+    """What a mission starts with: its options, its skills and world (None: simulated
+    here), how its skills are described, and the robot node of ``--ros``."""
+
+    options: MissionOptions
+    setup: MissionSetup | None
+    skills_text: str
+    robot: Any = None
+
+
+def _start_mission(args: argparse.Namespace, target: Target, resources: Any) -> _Start:
+    from plan_bridge.missions.mission import MissionSetup
+    from plan_bridge.missions.runner import MissionOptions
+
     default_scale = VIEWER_TIME_SCALE if args.viewer is not None else 0.0
     options = MissionOptions(
         seed=args.seed,
@@ -371,57 +449,53 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
     skills_text = "domain skills" if target.has_own_skills else "symbolic skills"
     if target.skill_map_path is not None:
         skills_text += f" and {target.skill_map_path.name}"
-    setup = None
-    robot_prefix = ""
-    if args.ros:
-        # The skills run on the robot node, against its world: nothing is simulated here.
-        robot = _connect_robot(
-            args, target, args.fail_rate if args.no_robot else fail_rate, resources
-        )
-        # A running robot (--no-robot) has its own seed and fault rate: those count.
-        fail_rate = robot.robot_info.get("fail_rate", fail_rate)
-        args.seed = robot.robot_info.get("seed", args.seed)
-        options = replace(options, seed=args.seed, fail_rate=fail_rate)
-        setup = MissionSetup(
-            skills=robot.skills(), world=robot.world(), concurrent=robot.concurrent
-        )
-        skills_text = f"{robot.robot_info.get('mode')} on the robot node /{robot.prefix}"
-        robot_prefix = robot.prefix
-    mission = prepare_mission(target, options, setup=setup, planner=planners[0])
-    executive = mission.executive
-    if args.ros:
-        # The mission's problem as a knowledge base, PlanSys2-style services on the
-        # executive's node (/knowledge/add_problem_goal, ...; docs/planning.md).
-        robot.serve_knowledge(mission.attach_knowledge())
-    if checkpoint is not None:
-        mission.resume(checkpoint)
-    out = sys.stderr
-    if not args.quiet:
-        verb = "resuming" if args.resume else "run"
-        print(
-            f"plan-bridge {verb}: {target.name}, {target.problem_label} "
-            f"({skills_text}, seed {args.seed}, "
-            f"fail rate {mission.fail_rate:g}, planner {mission.planner.name})",
-            file=out,
-            flush=True,
-        )
-        executive.add_listener(ProgressPrinter(out, verbose=args.verbose))
+    if not args.ros:
+        return _Start(options, None, skills_text)
+    # The skills run on the robot node, against its world: nothing is simulated here.
+    robot = _connect_robot(args, target, args.fail_rate if args.no_robot else fail_rate, resources)
+    # A running robot (--no-robot) has its own seed and fault rate: those count.
+    fail_rate = robot.robot_info.get("fail_rate", fail_rate)
+    args.seed = robot.robot_info.get("seed", args.seed)
+    return _Start(
+        replace(options, seed=args.seed, fail_rate=fail_rate),
+        MissionSetup(skills=robot.skills(), world=robot.world(), concurrent=robot.concurrent),
+        f"{robot.robot_info.get('mode')} on the robot node /{robot.prefix}",
+        robot,
+    )
+
+
+def _open_journal(
+    args: argparse.Namespace,
+    mission: Mission,
+    target: Target,
+    checkpoint: dict[str, Any] | None,
+    robot: Any,
+) -> Any:
+    """The journal of ``--journal`` (or the resumed one's), with the run's options in
+    its header; None without one."""
     journal_path = args.resume or args.journal
-    journal = None
-    if journal_path:
-        run_options = {key: getattr(args, key) for key in (*RESUMABLE, *RESUMED_UNLESS_GIVEN)}
-        run_options.update(
-            target=str(args.target), problem=str(target.problem_path), fail_rate=mission.fail_rate
-        )
-        run_options.update(_world_options(args, target))
-        if args.ros:
-            # The robot's world lives in its process: checkpoints hold no world snapshot.
-            run_options["ros"] = robot_prefix
-        journal = mission.record(
-            journal_path, header={**run_options, "run": run_options}, append=bool(args.resume)
-        )
-        if args.resume:
-            journal.write_raw("resumed", checkpoint=checkpoint is not None)
+    if not journal_path:
+        return None
+    run_options = {key: getattr(args, key) for key in (*RESUMABLE, *RESUMED_UNLESS_GIVEN)}
+    run_options.update(
+        target=str(args.target), problem=str(target.problem_path), fail_rate=mission.fail_rate
+    )
+    run_options.update(_world_options(args, target))
+    if robot is not None:
+        # The robot's world lives in its process: checkpoints hold no world snapshot.
+        run_options["ros"] = robot.prefix
+    journal = mission.record(
+        journal_path, header={**run_options, "run": run_options}, append=bool(args.resume)
+    )
+    if args.resume:
+        journal.write_raw("resumed", checkpoint=checkpoint is not None)
+    return journal
+
+
+def _serve_viewer(args: argparse.Namespace, mission: Mission, journal: Any, resources: Any) -> Any:
+    """The live viewer of ``--viewer``/``--control`` (None without) and the operator
+    console of ``--control``, ``--break`` and ``--start-paused``."""
+    executive = mission.executive
     viewer = None
     if args.viewer is not None or args.control:
         from smach.introspection import serve
@@ -444,15 +518,23 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
 
             url = enable_controls(viewer, console.controller, actions=console.viewer_actions())
             print(f"control: {url}", file=sys.stderr, flush=True)
-    outcome = mission.run()
+    return viewer
+
+
+def _report_run(
+    args: argparse.Namespace, mission: Mission, target: Target, outcome: str | None
+) -> None:
+    """The run's error, figures (``--json``), summary and picture (``--snapshot``)."""
     if mission.error is not None:
         print(f"plan-bridge: mission failed: {mission.error}", file=sys.stderr, flush=True)
-    report = executive.report
+    report = mission.executive.report
     figures = mission.figures()
     if args.json:
         print(json.dumps(figures, indent=None))
     if not args.quiet:
-        print(_summary(outcome, report, figures.get("faults_injected")), file=out, flush=True)
+        print(
+            _summary(outcome, report, figures.get("faults_injected")), file=sys.stderr, flush=True
+        )
     if args.snapshot:
         from plan_bridge.robosim.picture import picture_title, write_picture
         from plan_bridge.robosim.world import RobosimWorld
@@ -465,80 +547,8 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
     if args.quiet and not report.goal_reached:
         # No silent end: why the mission stopped (the summary says it without --quiet).
         print(f"plan-bridge: goal not reached: {report.explanation}", file=sys.stderr)
-    if viewer is not None and resources is not None:
-        # The mission is over, the page is not: keep it for whoever is looking.
-        print(
-            f"viewer: {viewer.url} - the mission ended; still serving it, Ctrl-C to stop",
-            file=sys.stderr,
-            flush=True,
-        )
-        with contextlib.suppress(KeyboardInterrupt):
-            viewer.wait()
-    return EXIT_OK if report.goal_reached else EXIT_FAILED
-
-
-def _configure_check(parser: argparse.ArgumentParser) -> None:
-    add_input_arguments(parser)
-
-
-def _check(args: argparse.Namespace) -> int:
-    from plan_bridge.errors import PlanBridgeError
-    from plan_bridge.missions.mission import load_target
-
-    try:
-        chosen = resolve_input(args, every_problem=True)
-    except InputError as exc:
-        return fail(str(exc))
-    single = len(chosen.problems) == 1
-    problems_found: list[str] = []
-    name = ""
-    for problem in chosen.problems:
-        try:
-            pddl_goal = args.goal if chosen.world is None else None  # a world's: checked on load
-            warnings = check_input(chosen.domain, problem, pddl_goal)
-            loaded = load_target(args.target, problem, goal=args.goal)
-            setup = loaded.setup(seed=0, fail_rate=0.0)
-        except PlanBridgeError as exc:
-            if single:
-                # One problem: the same message and exit code as `plan` and `run`.
-                return fail(str(exc))
-            problems_found.append(str(exc))
-            continue
-        name = loaded.name
-        for warning in warnings:
-            print(f"warning: {warning}", file=sys.stderr)
-        for note in warnings.notes:
-            print(f"note: {note}", file=sys.stderr)
-        for line in setup.skills.check(loaded.task):
-            problems_found.append(f"{problem.name}: {line}")
-        print(
-            f"{problem.name}: {len(loaded.task.actions)} actions, {len(loaded.task.objects)} objects, "
-            f"{len(loaded.task.goal_facts)} goal atoms"
-            + (" (given with --goal)" if loaded.given_goal is not None else ""),
-            file=sys.stderr,
-        )
-        from plan_bridge.planning.engines import engines_for, problem_kind
-
-        try:
-            engines = engines_for(loaded.task)  # raises when no installed engine fits
-        except PlanBridgeError as exc:
-            return fail(f"{problem.name}: {exc}")
-        print(
-            f"{problem.name}: {problem_kind(loaded.task).name} problem, planned by "
-            f"{' then '.join(engines)} (--planner auto)"
-        )
-    if problems_found:
-        return fail(f"{len(problems_found)} problem(s):\n  " + "\n  ".join(problems_found))
-    print(f"{name}: OK ({len(chosen.problems)} problem(s) checked)")
-    return EXIT_OK
 
 
 COMMANDS = (
     Command("run", "plan and execute a mission in the simulated world", _configure_run, _run),
-    Command(
-        "check",
-        "validate PDDL (a folder, or DOMAIN PROBLEM), skill bindings and outcome mappings",
-        _configure_check,
-        _check,
-    ),
 )

@@ -23,7 +23,6 @@ from plan_bridge.cli.base import (
     add_input_arguments,
     check_input,
     fail,
-    progress,
     resolve_input,
 )
 
@@ -166,8 +165,7 @@ def _run(args: argparse.Namespace) -> int:
     try:
         chosen = resolve_input(args)
         domain, problem = chosen.domain, chosen.problems[0]
-        for warning in check_input(domain, problem):
-            progress(f"warning: {warning}")
+        check_input(domain, problem).show()
         listed = _list(args, chosen.folder, domain, problem, world=chosen.world is not None)
     except (InputError, PlanBridgeError) as exc:
         return fail(str(exc))

@@ -77,43 +77,19 @@ def _configure(parser: argparse.ArgumentParser) -> None:
 
 def _run_command(args: argparse.Namespace) -> int:
     from plan_bridge.errors import PlanBridgeError
-    from plan_bridge.missions.mission import load_target
 
     approaches = [a.strip() for a in args.approaches.split(",") if a.strip()]
-    unknown = [a for a in approaches if a not in APPROACHES]
-    if unknown:
-        return fail(f"unknown approaches {unknown}; approaches: {', '.join(APPROACHES)}")
-    if args.runs < 1 or (args.jobs is not None and args.jobs < 1):
-        return fail("--runs and --jobs must be at least 1")
-    if args.cluster:
-        from plan_bridge.study.cluster import ClusterError, parse_cluster
-
-        if args.jobs is not None:
-            return fail("--jobs is for local runs; with --cluster the cluster's workers run them")
-        try:
-            parse_cluster(args.cluster)
-        except ClusterError as exc:
-            return fail(str(exc))
+    refused = _refused_options(args, approaches)
+    if refused is not None:
+        return refused
     jobs = args.jobs or max(1, min(2, os.cpu_count() or 1))
     try:
         seeds = [int(s) for s in args.seeds.split(",")] if args.seeds else list(range(args.runs))
     except ValueError:
         return fail(f"--seeds must be comma-separated integers, got {args.seeds!r}")
-    skipped: dict[str, list[str]] = {}
-    try:
-        for target in args.targets:
-            loaded = load_target(target, args.problem or None)
-            if "scripted" in approaches and not hasattr(loaded.module, "scripted"):
-                return fail(
-                    f"{target}: no scripted baseline (scripted() in the domain's Python); drop 'scripted' from --approaches"
-                )
-            for approach in approaches:
-                reason = inapplicable(approach, loaded.task)
-                if reason:
-                    skipped.setdefault(str(target), []).append(approach)
-                    print(f"plan-bridge study: {target}: {reason}; left out", file=sys.stderr)
-    except PlanBridgeError as exc:
-        return fail(str(exc))
+    skipped = _left_out(args, approaches)
+    if isinstance(skipped, int):
+        return skipped
     specs = [
         RunSpec(str(t), a, r, s, args.problem, args.variant)
         for t in args.targets
@@ -129,20 +105,6 @@ def _run_command(args: argparse.Namespace) -> int:
             f"{out}/results.csv already holds {len(written)} runs: pass --resume to continue "
             "that study (runs it has are skipped), or choose another --out"
         )
-
-    def progress(done: int, total: int, spec: RunSpec, row: dict[str, Any], elapsed: float) -> None:
-        width = 24
-        filled = int(width * done / total)
-        eta = elapsed / done * (total - done)
-        print(
-            f"\r[{'#' * filled}{'.' * (width - filled)}] {done}/{total} "
-            f"{Path(spec.target).name} {spec.approach} p={spec.fault_rate:g} seed {spec.seed}: "
-            f"{row['outcome']} ETA {eta:4.0f} s   ",
-            end="" if done < total else "\n",
-            file=sys.stderr,
-            flush=True,
-        )
-
     total_runs = len(specs)
     executor = f"Dask cluster {args.cluster}" if args.cluster else f"{jobs} local workers"
     print(
@@ -156,7 +118,7 @@ def _run_command(args: argparse.Namespace) -> int:
             out,
             jobs=jobs,
             run_timeout=args.run_timeout,
-            progress=progress,
+            progress=_progress,
             cluster=args.cluster,
         )
     except (PlanBridgeError, ValueError) as exc:
@@ -170,6 +132,70 @@ def _run_command(args: argparse.Namespace) -> int:
             flush=True,
         )
         raise
+    report = _write_report(args, rows, out)
+    errors = sum(1 for r in rows if r["outcome"] in ("error", "timeout", "crashed"))
+    print(f"{len(rows)} runs ({errors} errors); report: {report}", file=sys.stderr)
+    return EXIT_OK if errors == 0 else 1
+
+
+def _refused_options(args: argparse.Namespace, approaches: list[str]) -> int | None:
+    """The exit code for approaches, counts or a cluster that cannot be (None: fine)."""
+    unknown = [a for a in approaches if a not in APPROACHES]
+    if unknown:
+        return fail(f"unknown approaches {unknown}; approaches: {', '.join(APPROACHES)}")
+    if args.runs < 1 or (args.jobs is not None and args.jobs < 1):
+        return fail("--runs and --jobs must be at least 1")
+    if args.cluster:
+        from plan_bridge.study.cluster import ClusterError, parse_cluster
+
+        if args.jobs is not None:
+            return fail("--jobs is for local runs; with --cluster the cluster's workers run them")
+        try:
+            parse_cluster(args.cluster)
+        except ClusterError as exc:
+            return fail(str(exc))
+    return None
+
+
+def _left_out(args: argparse.Namespace, approaches: list[str]) -> dict[str, list[str]] | int:
+    """Target -> the approaches that do not apply to it (each said on stderr), or the
+    exit code when a target does not load or lacks the scripted baseline asked for."""
+    from plan_bridge.errors import PlanBridgeError
+    from plan_bridge.missions.mission import load_target
+
+    skipped: dict[str, list[str]] = {}
+    try:
+        for target in args.targets:
+            loaded = load_target(target, args.problem or None)
+            if "scripted" in approaches and not hasattr(loaded.module, "scripted"):
+                return fail(
+                    f"{target}: no scripted baseline (scripted() in the domain's Python); drop 'scripted' from --approaches"
+                )
+            for approach in approaches:
+                reason = inapplicable(approach, loaded.task)
+                if reason:
+                    skipped.setdefault(str(target), []).append(approach)
+                    print(f"plan-bridge study: {target}: {reason}; left out", file=sys.stderr)
+    except PlanBridgeError as exc:
+        return fail(str(exc))
+    return skipped
+
+
+def _progress(done: int, total: int, spec: RunSpec, row: dict[str, Any], elapsed: float) -> None:
+    width = 24
+    filled = int(width * done / total)
+    eta = elapsed / done * (total - done)
+    print(
+        f"\r[{'#' * filled}{'.' * (width - filled)}] {done}/{total} "
+        f"{Path(spec.target).name} {spec.approach} p={spec.fault_rate:g} seed {spec.seed}: "
+        f"{row['outcome']} ETA {eta:4.0f} s   ",
+        end="" if done < total else "\n",
+        file=sys.stderr,
+        flush=True,
+    )
+
+
+def _write_report(args: argparse.Namespace, rows: list[dict[str, Any]], out: Path) -> Path:
     authoring: list[dict[str, Any]] = []
     fault_models: dict[str, dict[str, float]] = {}
     for target in args.targets:
@@ -178,10 +204,7 @@ def _run_command(args: argparse.Namespace) -> int:
     # The command that produces these rows: --resume only says how they were collected.
     argv = [a for a in (sys.argv[2:] if len(sys.argv) > 2 else args.targets) if a != "--resume"]
     command = "plan-bridge study " + " ".join(argv)
-    report = write_report(rows, out, authoring, command, fault_models=fault_models)
-    errors = sum(1 for r in rows if r["outcome"] in ("error", "timeout", "crashed"))
-    print(f"{len(rows)} runs ({errors} errors); report: {report}", file=sys.stderr)
-    return EXIT_OK if errors == 0 else 1
+    return write_report(rows, out, authoring, command, fault_models=fault_models)
 
 
 COMMANDS = (

@@ -4,8 +4,12 @@
   effects, plan validation from a state;
 * :mod:`~plan_bridge.execution.world`: the believed world state;
 * :mod:`~plan_bridge.execution.compile`: a plan -> a SMACH machine of skills;
+* :mod:`~plan_bridge.execution.temporal`: a temporal plan -> a dispatcher of timed
+  steps (with :mod:`~plan_bridge.execution.temporal_network`,
+  :mod:`~plan_bridge.execution.timed_step` and :mod:`~plan_bridge.execution.timeline`);
 * :mod:`~plan_bridge.execution.executive`: the :class:`Executive` loop (dispatch,
   validate, repair, replan), itself a SMACH state;
+* :mod:`~plan_bridge.execution.repair`: the recovery ladder, a list of strategies;
 * :mod:`~plan_bridge.execution.simulation`: simulated worlds with faults;
 * :mod:`~plan_bridge.execution.events`: the executive's events.
 """

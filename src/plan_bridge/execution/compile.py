@@ -18,12 +18,13 @@ import re
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypedDict, TypeVar
 
 import smach
 from plan_bridge.execution.clock import SimClock, Ticket, clock_of
 from plan_bridge.execution.events import ObservationsApplied, StepFinished
 from plan_bridge.execution.semantics import ActionModel, GroundAction
+from plan_bridge.execution.temporal_network import is_temporal
 from plan_bridge.execution.world import (
     Observation,
     World,
@@ -32,7 +33,7 @@ from plan_bridge.execution.world import (
     normalise_observations,
 )
 from plan_bridge.pddl.task import Fact
-from plan_bridge.planning.planner import PlanStep
+from plan_bridge.planning.types import PlanStep
 from plan_bridge.skills.registry import (
     OBSERVATIONS_KEY,
     REQUIRED_OUTCOMES,
@@ -40,13 +41,21 @@ from plan_bridge.skills.registry import (
     Skill,
     SkillRegistry,
 )
-from smach.concurrence import _Child as _ConcurrenceChild
-from smach.concurrence import _Run as _ConcurrenceRun
-from smach.introspection.events import stamp
+from smach.introspection.events import Event, stamp
 
-__all__ = ["CompiledPlan", "StepRecord", "StepState", "compile_plan", "step_label"]
+__all__ = [
+    "CompiledPlan",
+    "PlanContainer",
+    "StepOptions",
+    "StepRecord",
+    "StepState",
+    "build_steps",
+    "compile_plan",
+    "step_label",
+]
 
 STEP_OUTCOMES = (*REQUIRED_OUTCOMES, "invalid")
+S = TypeVar("S", bound="StepState")
 
 
 @dataclass
@@ -78,6 +87,8 @@ class StepState(smach.Wrapper):
     """One plan step: precondition check, the skill, effects and observations."""
 
     extra_outcomes = ()
+    #: The userdata keys the step gives its skill: they do not cross its boundary.
+    provided_keys: tuple[str, ...] = STEP_KEYS
 
     def __init__(
         self,
@@ -109,7 +120,11 @@ class StepState(smach.Wrapper):
         # Step keys are provided here; observations are consumed here: neither crosses
         # the step's boundary. Every other key the skill declares comes from the plan.
         self.register_input_keys(
-            [remap.get(k, k) for k in state.get_registered_input_keys() if k not in STEP_KEYS]
+            [
+                remap.get(k, k)
+                for k in state.get_registered_input_keys()
+                if k not in self.provided_keys
+            ]
         )
         self.register_output_keys(
             [remap.get(k, k) for k in state.get_registered_output_keys() if k != OBSERVATIONS_KEY]
@@ -141,24 +156,37 @@ class StepState(smach.Wrapper):
             # Effects are those of the state the step starts in (conditional effects
             # read it), applied only if the skill succeeds.
             adds, dels = self.ground.effects(facts)
-        data = self._userdata._data
-        data["action"] = self.ground.name
-        data["arguments"] = self.ground.arguments
-        data["params"] = self.ground.binding
-        data.pop(OBSERVATIONS_KEY, None)
-        skill_outcome = self.run_child()
-        record.skill_outcome = skill_outcome
-        outcome = self.skill.map_outcome(skill_outcome) if self.skill else skill_outcome
-        try:
-            observations = normalise_observations(data.pop(OBSERVATIONS_KEY, None))
-        except ValueError as exc:
-            raise smach.InvalidUserCodeError(f"skill {self._path}/{label}: {exc}") from exc
+        self._give_step_keys()
+        outcome, observations = self._skill_result(record, self.run_child(), label)
         if outcome == "succeeded":
             self.belief.apply(adds, dels)
             self._adopted(observations)
         self._observe(record, observations)
         record.outcome = outcome
         return self._finish(record, started)
+
+    def _give_step_keys(self) -> dict[str, Any]:
+        """Put the step's keys in its userdata for the skill (none of its observations
+        yet); the userdata's values, for a subclass to add its own keys."""
+        data = self._userdata._data
+        data["action"] = self.ground.name
+        data["arguments"] = self.ground.arguments
+        data["params"] = self.ground.binding
+        data.pop(OBSERVATIONS_KEY, None)
+        return data
+
+    def _skill_result(
+        self, record: StepRecord, skill_outcome: str, label: str
+    ) -> tuple[str, list[Observation]]:
+        """The step's outcome for its skill's ``skill_outcome`` (kept in ``record``),
+        and what the skill observed (taken out of the userdata)."""
+        record.skill_outcome = skill_outcome
+        outcome = self.skill.map_outcome(skill_outcome) if self.skill else skill_outcome
+        try:
+            observations = normalise_observations(self._userdata._data.pop(OBSERVATIONS_KEY, None))
+        except ValueError as exc:
+            raise smach.InvalidUserCodeError(f"skill {self._path}/{label}: {exc}") from exc
+        return outcome, observations
 
     def _adopted(self, observations: Sequence[Observation]) -> None:
         """A user's skill succeeded: the world learns what it did (a simulated world
@@ -174,33 +202,40 @@ class StepState(smach.Wrapper):
         record.observations_changed = tuple(
             describe_observation(fact, truth) for fact, truth in changed
         )
-        if changed and self._bus.listeners:
+        if changed:
+            self._announce(ObservationsApplied, changed=record.observations_changed)
+
+    def _announce(self, kind: Callable[..., Event], **fields: Any) -> None:
+        """Emit this step's event ``kind`` with ``fields`` (its path, the time and the
+        thread filled in), if anybody listens."""
+        if self._bus.listeners:
             t, thread = stamp()
-            self._bus.emit(
-                ObservationsApplied(
-                    path=self._path, time=t, thread=thread, changed=record.observations_changed
-                )
-            )
+            self._bus.emit(kind(path=self._path, time=t, thread=thread, **fields))
 
     def _finish(self, record: StepRecord, started: float) -> str:
         record.duration_s = time.monotonic() - started
-        if self._bus.listeners:
-            t, thread = stamp()
-            self._bus.emit(
-                StepFinished(
-                    path=self._path,
-                    time=t,
-                    thread=thread,
-                    index=record.index,
-                    action=str(record.step),
-                    outcome=record.outcome,
-                    skill_outcome=record.skill_outcome,
-                    duration_s=record.duration_s,
-                )
-            )
+        self._announce(
+            StepFinished,
+            index=record.index,
+            action=str(record.step),
+            outcome=record.outcome,
+            skill_outcome=record.skill_outcome,
+            duration_s=record.duration_s,
+        )
         if self.on_finished is not None:
             self.on_finished(record)
         return record.outcome
+
+
+class PlanContainer(smach.Container):
+    """A container whose children come from a plan, not from initial states: setting
+    the initial state passes the userdata in only."""
+
+    def set_initial_state(
+        self, initial_states: Sequence[str], userdata: smach.UserData | None = None
+    ) -> None:
+        if userdata is not None:
+            self.userdata.update(userdata)
 
 
 @dataclass
@@ -244,39 +279,21 @@ def compile_plan(
     running when one fails); ``concurrent`` does not apply to it.
     """
     steps = list(steps)
-    if steps and any(step.start is not None for step in steps):
+    options: StepOptions = {
+        "first_index": first_index,
+        "check_preconditions": check_preconditions,
+        "on_finished": on_finished,
+        "variants": variants,
+        "world": world,
+    }
+    if is_temporal(steps):
         from plan_bridge.execution.temporal import compile_temporal
 
         return compile_temporal(
-            steps,
-            skills,
-            model,
-            belief,
-            first_index=first_index,
-            check_preconditions=check_preconditions,
-            on_finished=on_finished,
-            variants=variants,
-            time_scale=time_scale,
-            on_failure=on_failure,
-            world=world,
+            steps, skills, model, belief, time_scale=time_scale, on_failure=on_failure, **options
         )
-    width = max(2, len(str(first_index + len(steps))))
-    labels = [step_label(first_index + i, s, width) for i, s in enumerate(steps)]
-    states: list[StepState] = []
-    for i, step in enumerate(steps):
-        ground = model.ground(step)
-        skill_state, skill = skills.create(step, (variants or {}).get(i))
-        state = StepState(
-            first_index + i,
-            ground,
-            belief,
-            skill,
-            check_preconditions=check_preconditions,
-            on_finished=on_finished,
-            world=world,
-        )
-        state.add("SKILL", skill_state)
-        states.append(state)
+    width = _label_width(first_index, len(steps))
+    labels, states = build_steps(StepState, steps, skills, model, belief, **options)
     layers = _layers(steps, model) if concurrent else [[i] for i in range(len(steps))]
     sm = smach.StateMachine(outcomes=list(STEP_OUTCOMES))
     sm.register_input_keys({k for s in states for k in s.get_registered_input_keys()})
@@ -313,6 +330,55 @@ def compile_plan(
     return CompiledPlan(sm, steps, labels, states, layers)
 
 
+class StepOptions(TypedDict, total=False):
+    """How :func:`build_steps` makes the step states of a plan (its keyword arguments)."""
+
+    first_index: int
+    check_preconditions: bool
+    on_finished: Callable[[StepRecord], None] | None
+    variants: Mapping[int, str] | None
+    world: World | None
+
+
+def build_steps(
+    state_class: type[S],
+    steps: Sequence[PlanStep],
+    skills: SkillRegistry,
+    model: ActionModel,
+    belief: WorldState,
+    *,
+    first_index: int = 1,
+    check_preconditions: bool = True,
+    on_finished: Callable[[StepRecord], None] | None = None,
+    variants: Mapping[int, str] | None = None,
+    world: World | None = None,
+) -> tuple[list[str], list[S]]:
+    """The labels and the step states (of ``state_class``, each around its skill) of a
+    plan whose first step is numbered ``first_index``; ``variants`` maps a position in
+    ``steps`` to the skill variant it runs."""
+    width = _label_width(first_index, len(steps))
+    labels = [step_label(first_index + i, s, width) for i, s in enumerate(steps)]
+    states: list[S] = []
+    for i, step in enumerate(steps):
+        skill_state, skill = skills.create(step, (variants or {}).get(i))
+        state = state_class(
+            first_index + i,
+            model.ground(step),
+            belief,
+            skill,
+            check_preconditions=check_preconditions,
+            on_finished=on_finished,
+            world=world,
+        )
+        state.add("SKILL", skill_state)
+        states.append(state)
+    return labels, states
+
+
+def _label_width(first_index: int, count: int) -> int:
+    return max(2, len(str(first_index + count)))
+
+
 class TurnTakingConcurrence(smach.Concurrence):
     """A Concurrence whose children take turns on a simulated clock
     (:mod:`plan_bridge.execution.clock`): they run at once, but one at a time, the one
@@ -335,26 +401,26 @@ class TurnTakingConcurrence(smach.Concurrence):
         self.keys = None if keys is None else dict(keys)
         self._tickets: dict[str, Ticket] = {}
 
-    def _run(self) -> str | None:
+    def run_children(self) -> str | None:
         clock = self.clock
         if clock.taking_part():  # run by a thread that takes turns already: as it is
-            return super()._run()
+            return super().run_children()
         keys = self.keys or {label: n for n, label in enumerate(self.get_children())}
         self._tickets = {label: clock.admit(key) for label, key in keys.items()}
         try:
-            return super()._run()
+            return super().run_children()
         finally:
             tickets, self._tickets = self._tickets, {}
             for ticket in tickets.values():
                 clock.discard(ticket)
 
-    def _run_child(self, run: _ConcurrenceRun, child: _ConcurrenceChild) -> None:
-        ticket = self._tickets.get(child.label)
+    def run_branch(self, label: str, body: Callable[[], None]) -> None:
+        ticket = self._tickets.get(label)
         if ticket is None:
-            super()._run_child(run, child)
+            body()
             return
         with self.clock.turn(ticket):
-            super()._run_child(run, child)
+            body()
 
 
 class _TurnTakingLayer(TurnTakingConcurrence):

@@ -43,7 +43,7 @@ from smach.control import Controller, ControlRecord, controller_of
 
 if TYPE_CHECKING:
     from plan_bridge.execution.executive import Executive
-    from plan_bridge.planning.planner import PlanStep
+    from plan_bridge.planning.types import PlanStep
 
 __all__ = [
     "MissionControl",

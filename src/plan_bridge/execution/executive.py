@@ -4,7 +4,8 @@ The :class:`Executive` is a ``smach`` container (so it nests in hand-written mac
 and shows up in introspection as ``.../PLAN/03_PICK_CUP_TABLE/SKILL``). It stops early
 when the goal already holds; otherwise it plans (:mod:`.replanner`), runs the compiled
 plan, and after a failed or invalid step follows the recovery ladder of
-:mod:`.repair` (continue, retry, repair, replan, hold) within the policy's budgets
+:mod:`.repair` (a list of strategies: continue, retry, variant, redo, repair, replan
+and hold by default) within the policy's budgets
 (:mod:`.policy`). Every decision is an
 :class:`~plan_bridge.execution.events.ExecutiveDecision` event with its reason.
 
@@ -24,11 +25,17 @@ from typing import TYPE_CHECKING, Any
 
 import smach
 from plan_bridge.errors import FactError, PlanBridgeError
-from plan_bridge.execution.compile import CompiledPlan, StepRecord, StepState, compile_plan
+from plan_bridge.execution.compile import (
+    CompiledPlan,
+    PlanContainer,
+    StepRecord,
+    StepState,
+    compile_plan,
+)
 from plan_bridge.execution.events import ExecutiveDecision, PlanComputed
 from plan_bridge.execution.plan_cache import PlanCache
 from plan_bridge.execution.policy import ExecutionReport, ReplanPolicy
-from plan_bridge.execution.repair import Recovery
+from plan_bridge.execution.repair import Recovery, RecoveryStrategy, default_ladder
 from plan_bridge.execution.replanner import MissionEnded, Replanner
 from plan_bridge.execution.semantics import ActionModel
 from plan_bridge.execution.temporal import TemporalDispatch
@@ -40,9 +47,10 @@ from plan_bridge.execution.world import (
     normalise_observations,
 )
 from plan_bridge.pddl.task import Fact, PlanningTask, format_fact, parse_fact
-from plan_bridge.planning.planner import Planner, PlanResult, PlanStep, get_planner
+from plan_bridge.planning.registry import get_planner
+from plan_bridge.planning.types import Planner, PlanResult, PlanStep
 from plan_bridge.skills.registry import SkillRegistry
-from smach.introspection.events import stamp
+from smach.introspection.events import Event, stamp
 
 if TYPE_CHECKING:
     from plan_bridge.execution.control import MissionControl
@@ -54,7 +62,7 @@ __all__ = ["ExecutionReport", "Executive", "ReplanPolicy"]
 OUTCOMES = ("succeeded", "aborted", "preempted")
 
 
-class Executive(smach.Container):
+class Executive(PlanContainer):
     """Plans for ``task`` and executes the plan with ``skills``, replanning on failure.
 
     Outcomes: ``succeeded`` (goal reached), ``aborted`` (no plan, budget exhausted,
@@ -72,6 +80,11 @@ class Executive(smach.Container):
     ``knowledge``: a :class:`~plan_bridge.pddl.knowledge.KnowledgeBase` holding the
     problem (:meth:`attach_knowledge`): the belief is its facts, and the mission
     follows its objects and goal (a change of them stops the plan and replans).
+
+    ``recovery_ladder``: the recovery strategies tried in order after a failure
+    (:class:`~plan_bridge.execution.repair.RecoveryStrategy`; by default
+    :func:`~plan_bridge.execution.repair.default_ladder`), kept in
+    :attr:`recovery_ladder`.
     """
 
     #: Operator requests (skip, replan, new goal, abort): see execution/control.py.
@@ -94,6 +107,7 @@ class Executive(smach.Container):
         checkpoint: Callable[[dict[str, Any]], None] | None = None,
         plan_cache: PlanCache | None = None,
         knowledge: KnowledgeBase | None = None,
+        recovery_ladder: Sequence[RecoveryStrategy] | None = None,
     ) -> None:
         super().__init__(list(OUTCOMES), input_keys, output_keys)
         #: Called (from the step's thread) after every succeeded step with the state
@@ -110,6 +124,11 @@ class Executive(smach.Container):
         self.world = world if world is not None else skills.world
         self.planner = get_planner(planner) if isinstance(planner, str) else planner
         self.policy = policy or ReplanPolicy()
+        #: The recovery strategies tried in order after a failure (execution/repair.py):
+        #: :func:`~plan_bridge.execution.repair.default_ladder` unless given.
+        self.recovery_ladder: list[RecoveryStrategy] = (
+            default_ladder() if recovery_ladder is None else list(recovery_ladder)
+        )
         self.model = ActionModel(task)
         self.belief = (
             belief
@@ -154,12 +173,6 @@ class Executive(smach.Container):
         edges: list[tuple[str, str, str | None]] = [(o, "PLAN", o) for o in OUTCOMES]
         return [*edges, ("aborted", "PLAN", "PLAN"), ("invalid", "PLAN", "PLAN")]
 
-    def set_initial_state(
-        self, initial_states: Sequence[str], userdata: smach.UserData | None = None
-    ) -> None:
-        if userdata is not None:
-            self.userdata.update(userdata)
-
     def consistency_problems(self) -> list[str]:
         # Plans are compiled (and checked) at run time; the skills check builds every
         # skill once, so it runs on demand (check_consistency, `plan-bridge check`).
@@ -182,7 +195,7 @@ class Executive(smach.Container):
             compiled.machine.request_preempt()
 
     # -- execution -------------------------------------------------------------------------
-    def _run(self) -> str | None:
+    def run_children(self) -> str | None:
         """Run the mission; return succeeded / aborted / preempted.
 
         Called by ``smach.Container.execute``, the run protocol every container shares
@@ -234,7 +247,14 @@ class Executive(smach.Container):
             )
         replanner.start(self.report)
         recovery = self._recovery = Recovery(
-            self.model, self.policy, self.belief, replanner, self.report, self.decide, self.skills
+            self.model,
+            self.policy,
+            self.belief,
+            replanner,
+            self.report,
+            self.decide,
+            self.skills,
+            self.recovery_ladder,
         )
         self._sense()
         if self.model.goal_holds(self.belief.facts):
@@ -310,8 +330,7 @@ class Executive(smach.Container):
         if isinstance(compiled.machine, TemporalDispatch):
             # The first plan of a resumed run keeps the killed run's timeline.
             compiled.machine.plan_zero, self._resume_plan_zero = self._resume_plan_zero, None
-        compiled.machine._parent = self
-        compiled.machine._adopt(self._bus, f"{self._path}/PLAN")
+        self.replace_child("PLAN", compiled.machine)
         self._records = {}
         self._plan_in_force, self._first_in_force = plan, first_index
         self.report.final_plan = [str(s) for s in plan]
@@ -577,22 +596,23 @@ class Executive(smach.Container):
         return f"{step} {record.outcome}{detail}{seen}"
 
     def _plan_computed(self, reason: str, result: PlanResult) -> None:
+        self._announce(
+            PlanComputed,
+            reason=reason,
+            planner=result.planner,
+            status=result.status.value,
+            steps=tuple(str(s) for s in result.actions),
+            planning_time_s=result.planning_time_s,
+            explanation=result.explanation,
+            makespan=result.makespan,
+        )
+
+    def _announce(self, kind: Callable[..., Event], **fields: Any) -> None:
+        """Emit the executive's event ``kind`` with ``fields`` (its path, the time and
+        the thread filled in), if anybody listens."""
         if self._observed():
             t, thread = stamp()
-            self._emit(
-                PlanComputed(
-                    path=self._path,
-                    time=t,
-                    thread=thread,
-                    reason=reason,
-                    planner=result.planner,
-                    status=result.status.value,
-                    steps=tuple(str(s) for s in result.actions),
-                    planning_time_s=result.planning_time_s,
-                    explanation=result.explanation,
-                    makespan=result.makespan,
-                )
-            )
+            self._emit(kind(path=self._path, time=t, thread=thread, **fields))
 
     # -- belief --------------------------------------------------------------------------------
     def _sense(self, unobserved: Sequence[PlanStep] = ()) -> None:
@@ -615,18 +635,7 @@ class Executive(smach.Container):
 
     def decide(self, decision: str, reason: str, step: str = "") -> None:
         self.report.decisions.append({"decision": decision, "reason": reason, "step": step})
-        if self._observed():
-            t, thread = stamp()
-            self._emit(
-                ExecutiveDecision(
-                    path=self._path,
-                    time=t,
-                    thread=thread,
-                    decision=decision,
-                    reason=reason,
-                    step=step,
-                )
-            )
+        self._announce(ExecutiveDecision, decision=decision, reason=reason, step=step)
 
     def _begin(self, parent_ud: smach.UserData | None) -> None:
         super()._begin(parent_ud)

@@ -16,7 +16,7 @@ from collections.abc import Iterable, Sequence
 
 from plan_bridge.pddl.source import ProblemText
 from plan_bridge.pddl.task import Fact, PlanningTask
-from plan_bridge.planning.planner import PlanStep
+from plan_bridge.planning.types import PlanStep
 
 __all__ = ["PlanCache"]
 

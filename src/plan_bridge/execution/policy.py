@@ -44,7 +44,7 @@ class ReplanPolicy:
     at most ``planner_timeout``."""
     replan_portfolio: tuple[str, ...] = ("add-wastar", "cg-eager")
     """Fast Downward configurations (names in
-    :data:`plan_bridge.execution.portfolio.FAST_DOWNWARD_CONFIGS`) a replan tries
+    :data:`plan_bridge.planning.portfolio.FAST_DOWNWARD_CONFIGS`) a replan tries
     besides the executive's own planner, when that is Fast Downward: a greedy search
     can lose itself from a state where another configuration does not. Empty: the
     planner alone."""
@@ -63,7 +63,7 @@ class ReplanPolicy:
         for name in ("planner_timeout", "replan_timeout", "planning_time_budget"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"ReplanPolicy.{name} must be > 0, got {getattr(self, name)}")
-        from plan_bridge.execution.portfolio import FAST_DOWNWARD_CONFIGS
+        from plan_bridge.planning.portfolio import FAST_DOWNWARD_CONFIGS
 
         unknown = [n for n in self.replan_portfolio if n not in FAST_DOWNWARD_CONFIGS]
         if unknown:

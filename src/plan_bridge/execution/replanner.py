@@ -3,10 +3,13 @@
 A :class:`Replanner` asks the planner for the initial plan and for repairs and
 replans, within the policy's budgets (planner calls, planning time, a replan's own
 deadline). Before calling a planner it looks up the plan found before for the same
-(state, goal) in a :class:`~plan_bridge.execution.plan_cache.PlanCache`; a replan
-goes to a portfolio of Fast Downward configurations (:mod:`.portfolio`) when the
-executive's planner is Fast Downward. Every solve runs in a helper thread, so that
-a preempt request is answered at once (and kills the planner process).
+(state, goal) in a :class:`~plan_bridge.execution.plan_cache.PlanCache`. A replan goes
+to a portfolio of Fast Downward configurations (:mod:`plan_bridge.planning.portfolio`)
+when the executive's planner is Fast Downward; ``auto`` plans with the warm search
+first (:meth:`~plan_bridge.planning.engines.AutoPlanner.for_execution`), and a plan of
+the warm search that the action model does not accept is planned again by the
+engines. Every solve runs in a helper thread, so that a preempt request is answered
+at once (and kills the planner process).
 """
 
 from __future__ import annotations
@@ -17,11 +20,13 @@ from collections.abc import Callable, Sequence
 
 from plan_bridge.execution.plan_cache import PlanCache
 from plan_bridge.execution.policy import ExecutionReport, ReplanPolicy
-from plan_bridge.execution.portfolio import PlannerPortfolio, fast_downward_portfolio
 from plan_bridge.execution.semantics import ActionModel
 from plan_bridge.execution.world import WorldState
 from plan_bridge.pddl.task import Fact, PlanningTask
-from plan_bridge.planning.planner import Planner, PlanResult, PlanStatus, PlanStep, UPPlanner
+from plan_bridge.planning.engines import WARM, AutoPlanner
+from plan_bridge.planning.planner import UPPlanner
+from plan_bridge.planning.portfolio import PlannerPortfolio, fast_downward_portfolio
+from plan_bridge.planning.types import Planner, PlanResult, PlanStatus, PlanStep
 
 __all__ = ["MissionEnded", "Replanner"]
 
@@ -51,6 +56,8 @@ class Replanner:
     ) -> None:
         self.task = task
         self.planner = planner
+        # What plans: ``auto`` with the warm search first (replans start no process).
+        self._solver = planner.for_execution() if isinstance(planner, AutoPlanner) else planner
         self.policy = policy
         self.model = model
         self.belief = belief
@@ -73,13 +80,20 @@ class Replanner:
         return self._replan_planner
 
     def _build_replan_planner(self) -> Planner:
-        planner = self.planner
+        planner = self._solver
         names = self.policy.replan_portfolio
         if names and isinstance(planner, UPPlanner) and planner.engine == "fast-downward":
             portfolio = fast_downward_portfolio(names, pool=planner.pool, first=planner)
             if len(portfolio.members) > 1:
                 return portfolio
         return planner
+
+    def _engine_planner(self) -> Planner:
+        """The planner without the warm search (``auto``'s engines, else Fast Downward)."""
+        if isinstance(self.planner, AutoPlanner) and not self.planner.warm:
+            return self.planner
+        pool = self.planner.pool if isinstance(self.planner, UPPlanner) else None
+        return UPPlanner(pool=pool)
 
     def start(self, report: ExecutionReport) -> None:
         """Begin an execution that reports into ``report``."""
@@ -134,11 +148,18 @@ class Replanner:
                 "aborted", f"planning time budget ({policy.planning_time_budget} s) exhausted"
             )
         timeout = min(policy.planner_timeout, remaining)
-        planner = self.planner
+        planner = self._solver
         if replan:
             timeout = min(timeout, policy.replan_timeout)
             planner = self.replan_planner
         result = self._solve(planner, facts, timeout, goal)
+        if (
+            result.solved
+            and result.planner == WARM
+            and not self._reaches(result.actions, facts, goal)
+        ):
+            # The warm search's plan does not fit the action model: an engine plans.
+            result = self._solve(self._engine_planner(), facts, timeout, goal)
         report.planner_calls += 1
         if final:
             self.budgeted_calls += 1
@@ -190,7 +211,7 @@ class Replanner:
 
         def work() -> None:
             try:
-                if isinstance(planner, (UPPlanner, PlannerPortfolio)):
+                if isinstance(planner, (UPPlanner, PlannerPortfolio, AutoPlanner)):
                     # The preempt event cancels the solve: its process is killed.
                     box.append(
                         planner.solve(

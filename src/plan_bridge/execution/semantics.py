@@ -38,7 +38,7 @@ from typing import Any
 from plan_bridge.errors import PlanBridgeError, UnsupportedFeatureError
 from plan_bridge.execution.world import FactSnapshot, values_of
 from plan_bridge.pddl.task import Fact, PlanningTask, format_fact
-from plan_bridge.planning.planner import PlanStep
+from plan_bridge.planning.types import PlanStep
 
 __all__ = ["ActionModel", "GroundAction", "PlanCheck"]
 
@@ -148,8 +148,8 @@ class _Compiler:
             return self.comparison(node, lambda x, y: x <= y)
         if node.is_lt():
             return self.comparison(node, lambda x, y: x < y)
-        if node.is_equals() and not node.arg(0).type.is_user_type():
-            return self.comparison(node, lambda x, y: abs(x - y) <= 1e-9)
+        if node.is_equals():
+            return self._equality(node)
         if node.is_bool_constant():
             value = bool(node.bool_constant_value())
             return lambda b, f: value
@@ -173,26 +173,32 @@ class _Compiler:
         if node.is_iff():
             lhs, rhs = self.condition(node.arg(0)), self.condition(node.arg(1))
             return lambda b, f: lhs(b, f) == rhs(b, f)
-        if node.is_equals():
-            left, right = node.arg(0), node.arg(1)
-            if not left.type.is_user_type():
-                raise self._numeric(node)
-            lt, rt = self.term(left), self.term(right)
-            return lambda b, f: lt(b) == rt(b)
         if node.is_exists() or node.is_forall():
-            names = [v.name for v in node.variables()]
-            domains = [self.objects(v.type) for v in node.variables()]
-            body = self.condition(node.arg(0))
-            quantifier = any if node.is_exists() else all
-
-            def quantified(b: Binding, f: Facts) -> bool:
-                return quantifier(
-                    body({**b, **dict(zip(names, combo, strict=True))}, f)
-                    for combo in itertools.product(*domains)
-                )
-
-            return quantified
+            return self._quantified(node)
         raise self._numeric(node)
+
+    def _equality(self, node: Any) -> Condition:
+        """``(= A B)``: of two numbers (within 1e-9), or of two objects."""
+        left, right = node.arg(0), node.arg(1)
+        if not left.type.is_user_type():
+            return self.comparison(node, lambda x, y: abs(x - y) <= 1e-9)
+        lt, rt = self.term(left), self.term(right)
+        return lambda b, f: lt(b) == rt(b)
+
+    def _quantified(self, node: Any) -> Condition:
+        """``exists`` or ``forall`` over the objects of the variables' types."""
+        names = [v.name for v in node.variables()]
+        domains = [self.objects(v.type) for v in node.variables()]
+        body = self.condition(node.arg(0))
+        quantifier = any if node.is_exists() else all
+
+        def quantified(b: Binding, f: Facts) -> bool:
+            return quantifier(
+                body({**b, **dict(zip(names, combo, strict=True))}, f)
+                for combo in itertools.product(*domains)
+            )
+
+        return quantified
 
     def render(self, node: Any) -> Callable[[Binding], str]:
         """PDDL text of a condition with the parameters bound: ``(item-at cup hall)``."""
@@ -282,7 +288,7 @@ class _LiftedAction:
     """One phase for an instantaneous action; start and end for a durative one."""
     invariant_parts: Parts = ()
     end_parts: Parts = ()
-    duration: tuple[Value, Value] | None = None
+    durative: bool = False
 
 
 def _bindings(
@@ -355,7 +361,7 @@ class GroundAction:
     @property
     def durative(self) -> bool:
         """Whether this is a durative action (start and end effects, an invariant)."""
-        return self._lifted.duration is not None
+        return self._lifted.durative
 
     def applicable(self, facts: Facts) -> bool:
         """Whether the action can start in ``facts``: its preconditions hold (for a
@@ -396,16 +402,6 @@ class GroundAction:
         """The at-end conditions of a durative action that do not hold in ``facts``."""
         b = self._binding
         return [text(b) for text, cond in self._lifted.end_parts if not cond(b, facts)]
-
-    def duration_bounds(self, facts: Facts) -> tuple[float, float] | None:
-        """(lower, upper) duration in ``facts`` (None: not durative, or undefined)."""
-        bounds = self._lifted.duration
-        if bounds is None:
-            return None
-        try:
-            return bounds[0](self._binding, facts), bounds[1](self._binding, facts)
-        except (KeyError, ZeroDivisionError):
-            return None
 
     def start_effects(self, facts: Facts) -> tuple[set[Fact], set[Fact], Values]:
         """(added, deleted, numeric values) at the start (all effects if instantaneous)."""
@@ -518,7 +514,6 @@ class ActionModel:
             raise PlanBridgeError(
                 f"unknown action {name!r}; actions: {', '.join(sorted(self.task.actions))}"
             ) from exc
-        c = self._compiler
         durative = hasattr(action, "duration")
         if durative:
             at_start, over_all, at_end = _timed_conditions(action)
@@ -530,9 +525,6 @@ class ActionModel:
         phases = [self._phase(name, start_effects)]
         if durative:
             phases.append(self._phase(name, end_effects))
-        duration = None
-        if durative:
-            duration = (c.number(action.duration.lower), c.number(action.duration.upper))
         lifted = _LiftedAction(
             name=name,
             parameters=tuple(p.name for p in action.parameters),
@@ -542,7 +534,7 @@ class ActionModel:
             phases=tuple(phases),
             invariant_parts=self._parts(over_all)[0],
             end_parts=self._parts(at_end)[0],
-            duration=duration,
+            durative=durative,
         )
         self._lifted[name] = lifted
         return lifted

@@ -28,7 +28,7 @@ from plan_bridge.execution.semantics import ActionModel, GroundAction
 from plan_bridge.execution.snapshots import SnapshotError, decode, encode
 from plan_bridge.execution.world import FactSnapshot, Observation
 from plan_bridge.pddl.task import Fact, PlanningTask, format_fact, parse_fact
-from plan_bridge.planning.planner import PlanStep
+from plan_bridge.planning.types import PlanStep
 from plan_bridge.skills.registry import SkillRegistry
 
 __all__ = ["Fault", "SimulatedWorld", "SymbolicSkill", "symbolic_skills"]

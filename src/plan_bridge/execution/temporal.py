@@ -2,24 +2,32 @@
 
 A time-triggered plan (each step with a planned ``start`` and ``duration``) compiles
 into a :class:`TemporalDispatch`: a ``smach`` container whose children are
-:class:`TimedStepState` steps, run concurrently in their own threads, like a
-Concurrence whose children start at different times.
+:class:`~plan_bridge.execution.timed_step.TimedStepState` steps, run concurrently in
+their own threads, like a Concurrence whose children start at different times. The
+mechanism is in four modules:
 
-**When a step starts.** Before the run, the plan is turned into a simple temporal
-network over the steps' start and end points (:func:`precedence`): a step *depends*
-on an earlier one when one writes an atom (or a number) the other reads or writes.
-A dependent step waits for the earlier step's **end** when the plan starts it after
-that end, else for its **start** (the two overlap in the plan); in both cases it also
-waits the planned lag between those points, times ``time_scale`` (wall seconds per
-plan second). With ``time_scale > 0`` no step starts before its planned time on the
-wall clock either (``t0 + start x time_scale``), so a simulated run plays the plan's
-timeline. A step whose predecessors have happened starts only when its at-start
-conditions hold in the belief; while other steps run it waits for them (the belief
-may still change), and when nothing runs it starts anyway and reports ``invalid``.
-So a late action delays its dependents instead of breaking them, and independent
-actions planned with it go ahead; those planned after it wait with it (the plan is
-broken there: the replan comes when the steps running end, instead of after another
-robot's steps were played to the plan's end).
+* :mod:`~plan_bridge.execution.temporal_network`: the simple temporal network over the
+  steps' start and end points (which points a step's start and end wait for);
+* :mod:`~plan_bridge.execution.timed_step`: one step (at-start, over-all and at-end
+  conditions and effects, its skill's keys);
+* this module: the dispatcher that runs the steps on the network;
+* :mod:`~plan_bridge.execution.timeline`: the events every step emits, and the
+  recorder of a run's makespans.
+
+**When a step starts.** A step *depends* on an earlier one when one writes an atom (or
+a number) the other reads or writes. A dependent step waits for the earlier step's
+**end** when the plan starts it after that end, else for its **start** (the two
+overlap in the plan); in both cases it also waits the planned lag between those
+points, times ``time_scale`` (wall seconds per plan second). With ``time_scale > 0``
+no step starts before its planned time on the wall clock either (``t0 + start x
+time_scale``), so a simulated run plays the plan's timeline. A step whose
+predecessors have happened starts only when its at-start conditions hold in the
+belief; while other steps run it waits for them (the belief may still change), and
+when nothing runs it starts anyway and reports ``invalid``. So a late action delays
+its dependents instead of breaking them, and independent actions planned with it go
+ahead; those planned after it wait with it (the plan is broken there: the replan
+comes when the steps running end, instead of after another robot's steps were played
+to the plan's end).
 
 **Whose clock.** The dispatcher follows a :class:`~plan_bridge.execution.clock.Clock`:
 the wall clock by default (a robot), or a simulated world's clock. On a simulated clock
@@ -30,27 +38,17 @@ the one due first in simulated time, ties broken by step index, the dispatcher
 first). Ends that fall at the same simulated instant are thus met in one order, and a
 seeded simulated run is a function of its seed.
 
-**While a step runs.** At-start effects (and numeric ones) reach the belief when it
-starts; its over-all conditions are checked on every change of the belief (a belief
-listener, no polling) and a violation preempts its skill: the step ends ``aborted``
-naming the condition. When the skill succeeds, the at-end conditions are checked and
-the at-end effects applied, computed in the belief of that moment (a battery drained
-meanwhile by another action is decreased from its current value). Skills receive the
-planned duration in ``ud.duration`` (plan seconds) besides the usual step keys,
-``ud.end_ready``: a callable that returns once the plan lets the step end, and
-``ud.begun``: a callable a skill that declares it as an input key calls once its
-action has begun (the robot took it up); a step's *start point*, which the steps
-planned to start during it wait for, is that call, or for a skill without it the
-moment its skill starts. (A door held open at the start of one step is open before
-the step that passes through it begins, whichever thread runs first.)
+**Start points.** A step's *start point*, which the steps planned to start during it
+wait for, is its skill's call of ``ud.begun`` or, for a skill without it, the moment
+its skill starts. (A door held open at the start of one step is open before the step
+that passes through it begins, whichever thread runs first.)
 
 **When a step ends.** A step's end waits for the points planned before it of the
 steps it interferes with, and for the end of an interfering step nested in it that is
-planned to end at the same instant (:func:`end_precedence`): a door held for a robot
-passing through is not released before the robot is through, however quick the
-holding skill. The wait happens when the skill calls ``ud.end_ready()`` (a skill holding
-something calls it before letting go) and in any case before the at-end effects
-reach the belief.
+planned to end at the same instant: a door held for a robot passing through is not
+released before the robot is through, however quick the holding skill. The wait
+happens when the skill calls ``ud.end_ready()`` (a skill holding something calls it
+before letting go) and in any case before the at-end effects reach the belief.
 
 **Failure.** The first step that ends other than ``succeeded`` stops new starts. The
 policy ``on_failure`` says what happens to the steps still running: ``"finish"``
@@ -59,45 +57,58 @@ the belief stays consistent with what happened) or ``"preempt"``. The container 
 ends with that step's outcome, and the executive above validates, repairs or replans
 from the belief as for sequential plans.
 
-Events: every step emits :class:`ActionStarted` and :class:`ActionEnded` with its
-planned and actual (wall, since the dispatch began) times, on the same stream as
-every other event: journal, viewer timeline and study read the same records.
-
-(Over 600 lines: the temporal network, the timed step and the dispatcher that runs
-them are one mechanism; its invariants about start and end points are read together.)
+The names of the four modules are importable from here as well.
 """
 
 from __future__ import annotations
 
 import threading
 import time
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from functools import partial
+from typing import Any, Unpack
 
 import smach
 from plan_bridge.execution.clock import WALL_CLOCK, Clock, Ticket, clock_of
 from plan_bridge.execution.compile import (
     STEP_OUTCOMES,
     CompiledPlan,
-    StepRecord,
-    StepState,
-    step_label,
+    PlanContainer,
+    StepOptions,
+    build_steps,
 )
-from plan_bridge.execution.semantics import ActionModel, GroundAction
-from plan_bridge.execution.world import World, WorldState, normalise_observations
+from plan_bridge.execution.semantics import ActionModel
+from plan_bridge.execution.temporal_network import (
+    EPSILON,
+    Edge,
+    end_precedence,
+    footprints,
+    is_temporal,
+    precedence,
+)
+from plan_bridge.execution.timed_step import (
+    BEGUN_KEY,
+    DURATION_KEY,
+    END_READY_KEY,
+    StepHooks,
+    TimedStepState,
+)
+from plan_bridge.execution.timeline import ActionEnded, ActionStarted, TimelineRecorder
+from plan_bridge.execution.world import WorldState
 from plan_bridge.pddl.task import Fact
-from plan_bridge.planning.planner import PlanStep
-from plan_bridge.skills.registry import OBSERVATIONS_KEY, STEP_KEYS, SkillRegistry
-from smach.introspection.events import Event, stamp
+from plan_bridge.planning.types import PlanStep
+from plan_bridge.skills.registry import SkillRegistry
 
 __all__ = [
     "BEGUN_KEY",
     "DURATION_KEY",
     "END_READY_KEY",
+    "EPSILON",
     "ActionEnded",
     "ActionStarted",
     "Edge",
+    "StepHooks",
     "TemporalDispatch",
     "TimedStepState",
     "TimelineRecorder",
@@ -107,455 +118,7 @@ __all__ = [
     "precedence",
 ]
 
-#: Userdata key holding a step's planned duration (plan seconds) for its skill.
-DURATION_KEY = "duration"
-#: Userdata key of a callable a skill may call before it ends its action in the
-#: world: it returns once the plan allows this step to end (a door is held until
-#: the robot passing through it is through).
-END_READY_KEY = "end_ready"
-#: Userdata key of a callable a skill that declares it calls once its action has begun
-#: in the world: the step's start point, for the steps that wait for it.
-BEGUN_KEY = "begun"
-_TIMED_STEP_KEYS = (*STEP_KEYS, DURATION_KEY, END_READY_KEY, BEGUN_KEY)
-#: Plan times closer than this are the same instant (engines separate by epsilon).
-EPSILON = 1e-6
 POLICIES = ("finish", "preempt")
-
-
-def is_temporal(steps: Sequence[PlanStep]) -> bool:
-    """Whether ``steps`` is a time-triggered plan (its steps carry start times)."""
-    return any(step.start is not None for step in steps)
-
-
-@dataclass(slots=True, kw_only=True)
-class ActionStarted(Event):
-    """A step of a temporal plan started (``path`` is the step's state)."""
-
-    kind: ClassVar[str] = "action_started"
-    index: int
-    action: str
-    planned_start: float
-    planned_duration: float
-    actual_start: float
-    """Wall seconds since the dispatch began."""
-    time_scale: float = 0.0
-    """Wall seconds per plan second of the dispatch (0: as fast as it goes)."""
-
-
-@dataclass(slots=True, kw_only=True)
-class ActionEnded(Event):
-    """A step of a temporal plan ended (``path`` is the step's state)."""
-
-    kind: ClassVar[str] = "action_ended"
-    index: int
-    action: str
-    outcome: str
-    planned_start: float
-    planned_duration: float
-    actual_start: float
-    actual_end: float
-
-
-class TimelineRecorder:
-    """A listener for the makespans of a run: planned (of the first temporal plan) and
-    executed (wall seconds from the first action's start to the last one's end)."""
-
-    def __init__(self) -> None:
-        self.makespan_planned: float | None = None
-        self._first: float | None = None
-        self._last: float | None = None
-
-    def __call__(self, event: Event) -> None:
-        from plan_bridge.execution.events import PlanComputed
-
-        if isinstance(event, PlanComputed):
-            if self.makespan_planned is None and event.makespan is not None:
-                self.makespan_planned = event.makespan
-        elif isinstance(event, ActionStarted):
-            if self._first is None:
-                self._first = event.time
-        elif isinstance(event, ActionEnded):
-            self._last = event.time
-
-    @property
-    def temporal(self) -> bool:
-        return self.makespan_planned is not None
-
-    @property
-    def makespan_executed(self) -> float | None:
-        if self._first is None or self._last is None:
-            return None
-        return self._last - self._first
-
-
-# -- the temporal network ------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class Edge:
-    """Step ``after`` waits for the ``point`` (``start``/``end``) of step ``before``
-    and then ``lag`` plan seconds."""
-
-    before: int
-    after: int
-    point: str
-    lag: float
-
-
-class _Recorder(set[Fact]):
-    """A state that records which atoms and numbers a condition reads."""
-
-    def __init__(self, answer: bool) -> None:
-        super().__init__()
-        self.answer = answer
-        self.read: set[Fact] = set()
-        self.values = _RecordingValues(self.read)
-
-    def __contains__(self, fact: object) -> bool:
-        if isinstance(fact, tuple):
-            self.read.add(fact)
-        return self.answer
-
-
-class _RecordingValues(Mapping[Fact, float]):
-    def __init__(self, read: set[Fact]) -> None:
-        self.read = read
-
-    def __getitem__(self, key: Fact) -> float:
-        self.read.add(key)
-        return 1.0
-
-    def __iter__(self) -> Iterator[Fact]:
-        return iter(())
-
-    def __len__(self) -> int:
-        return 0
-
-
-def _footprint(ground: GroundAction) -> tuple[set[Fact], set[Fact]]:
-    """(atoms read, atoms written) by an action, numbers included (conservatively:
-    both outcomes of every test are explored once)."""
-    reads: set[Fact] = set()
-    writes: set[Fact] = set()
-    for answer in (True, False):
-        state = _Recorder(answer)
-        ground.applicable(state)
-        ground.unmet_preconditions(state)
-        ground.unmet_invariant(state)
-        ground.unmet_at_end(state)
-        adds, dels, values = ground.all_effects(state)
-        reads |= state.read
-        writes |= adds | dels | set(values)
-    return reads, writes
-
-
-Footprint = tuple[set[Fact], set[Fact]]
-
-
-def footprints(steps: Sequence[PlanStep], model: ActionModel) -> list[Footprint]:
-    """The (read, written) atoms of each step, for :func:`precedence` and
-    :func:`end_precedence` (computing them is most of compiling a temporal plan)."""
-    return [_footprint(model.ground(step)) for step in steps]
-
-
-def end_precedence(
-    steps: Sequence[PlanStep], model: ActionModel, prints: Sequence[Footprint] | None = None
-) -> list[list[Edge]]:
-    """For each step, the points its *end* waits for: the start and end points of the
-    interfering steps planned before its end, and the end of an interfering step that
-    began after it and is planned to end with it (a light held for an inspection is not
-    switched off before the inspection ends, however quick the holding skill)."""
-    prints = footprints(steps, model) if prints is None else prints
-    starts = [step.start or 0.0 for step in steps]
-    ends = [(step.start or 0.0) + (step.duration or 0.0) for step in steps]
-    waits: list[list[Edge]] = [[] for _ in steps]
-    for i in range(len(steps)):
-        reads_i, writes_i = prints[i]
-        for j in range(len(steps)):
-            reads_j, writes_j = prints[j]
-            if i == j or not (writes_i & (reads_j | writes_j) or writes_j & reads_i):
-                continue
-            nested = starts[j] > starts[i] + EPSILON  # j began while i was under way
-            for point, at in (("start", starts[j]), ("end", ends[j])):
-                before = at < ends[i] - EPSILON and (point == "end" or nested)
-                # A step nested in this one and planned to end at the same instant ends
-                # first (PDDL's over-all conditions need not hold at the end point): the
-                # door is let go once the robot passing through is through.
-                together = point == "end" and nested and at <= ends[i] + EPSILON
-                if before or together:
-                    waits[i].append(Edge(j, i, point, 0.0))
-    return waits
-
-
-def precedence(
-    steps: Sequence[PlanStep], model: ActionModel, prints: Sequence[Footprint] | None = None
-) -> list[list[Edge]]:
-    """For each step, the edges its start waits for (see the module documentation)."""
-    prints = footprints(steps, model) if prints is None else prints
-    starts = [step.start or 0.0 for step in steps]
-    ends = [(step.start or 0.0) + (step.duration or 0.0) for step in steps]
-    order = sorted(range(len(steps)), key=lambda i: (starts[i], i))
-    waits: list[list[Edge]] = [[] for _ in steps]
-    for position, j in enumerate(order):
-        reads_j, writes_j = prints[j]
-        for i in order[:position]:
-            reads_i, writes_i = prints[i]
-            if not (writes_i & (reads_j | writes_j) or writes_j & reads_i):
-                continue
-            if starts[j] >= ends[i] - EPSILON:
-                waits[j].append(Edge(i, j, "end", max(0.0, starts[j] - ends[i])))
-            else:
-                waits[j].append(Edge(i, j, "start", max(0.0, starts[j] - starts[i])))
-    return waits
-
-
-# -- one durative step ---------------------------------------------------------------------
-
-
-@dataclass
-class Timing:
-    """Planned and actual times of one step (actual: wall seconds since dispatch)."""
-
-    planned_start: float
-    planned_duration: float
-    actual_start: float | None = None
-    actual_end: float | None = None
-
-
-class TimedStepState(StepState):
-    """A step of a temporal plan: at-start checks and effects when it starts, over-all
-    conditions watched while its skill runs, at-end checks and effects on success."""
-
-    def __init__(
-        self,
-        index: int,
-        ground: GroundAction,
-        belief: WorldState,
-        skill: Any,
-        *,
-        check_preconditions: bool = True,
-        on_finished: Callable[[StepRecord], None] | None = None,
-        world: World | None = None,
-    ) -> None:
-        super().__init__(
-            index,
-            ground,
-            belief,
-            skill,
-            check_preconditions=check_preconditions,
-            on_finished=on_finished,
-            world=world,
-        )
-        step = ground.step
-        self.timing = Timing(step.start or 0.0, step.duration or 0.0)
-        self.clock: Callable[[], float] = time.monotonic
-        #: The dispatch's wall seconds per plan second (told to the viewer's timeline).
-        self.time_scale = 0.0
-        #: Called when the skill succeeded, before the end point: the dispatcher
-        #: holds the end until the points planned before it have happened.
-        self.before_end: Callable[[], None] | None = None
-        #: Called once at the step's start point (see :data:`BEGUN_KEY`).
-        self.on_begun: Callable[[], None] | None = None
-        #: Called with the outcome when the step fails, before what it observed
-        #: reaches the belief: no step is started on the strength of those
-        #: observations after the failure that stops new starts.
-        self.on_failed: Callable[[str], None] | None = None
-        self._begun_once = threading.Lock()
-        self._has_begun = False
-        #: Held from reading the belief to applying the effects computed from it (the
-        #: dispatch shares one between its steps): two steps increasing the same
-        #: number at once must not both add to the old value.
-        self.effects_lock = threading.Lock()
-        #: While the step is in progress (its at-start effects in the belief, its at-end
-        #: ones not yet): (facts its start removed, facts its start added), what undoing
-        #: it would restore; None otherwise. Read and written under ``effects_lock``.
-        self.in_flight: tuple[frozenset[Fact], frozenset[Fact]] | None = None
-        self._violation: list[str] = []
-
-    def add(
-        self, label: str, state: smach.State, remapping: Mapping[str, str] | None = None
-    ) -> smach.State:
-        added = super(StepState, self).add(label, state, remapping)
-        remap = remapping or {}
-        # As StepState.add, with the planned duration provided here as well.
-        self.register_input_keys(
-            [
-                remap.get(k, k)
-                for k in state.get_registered_input_keys()
-                if k not in _TIMED_STEP_KEYS
-            ]
-        )
-        self.register_output_keys(
-            [remap.get(k, k) for k in state.get_registered_output_keys() if k != OBSERVATIONS_KEY]
-        )
-        return added
-
-    def run(self, child: smach.State, label: str) -> str:
-        record = StepRecord(self.index, self.ground.step)
-        self.record = record
-        self._violation = []
-        started = time.monotonic()
-        ground = self.ground
-        with self.effects_lock:
-            with self.belief.locked() as facts:
-                startable = not self.check_preconditions or ground.applicable(facts)
-                if startable:
-                    adds, dels, values = ground.start_effects(facts)
-                    removed = frozenset(f for f in dels if f in facts and f not in adds)
-                    added = frozenset(f for f in adds if f not in facts)
-                else:
-                    record.unmet = tuple(ground.unmet_preconditions(facts))
-            if startable:
-                self.belief.apply(adds, dels)
-                self.belief.set_values(values)
-                self.in_flight = (removed, added)
-        if not startable:  # (outside the lock: finishing may write a checkpoint, which takes it)
-            record.outcome = "invalid"
-            return self._finish(record, started)
-        try:
-            return self._run_started(child, label, record, started)
-        finally:
-            with self.effects_lock:  # a failed step: its observations are in the belief
-                self.in_flight = None
-
-    def _run_started(
-        self, child: smach.State, label: str, record: StepRecord, started: float
-    ) -> str:
-        ground = self.ground
-        self._started()
-        data = self._userdata._data
-        data["action"] = ground.name
-        data["arguments"] = ground.arguments
-        data["params"] = ground.binding
-        data[DURATION_KEY] = self.timing.planned_duration
-        data[END_READY_KEY] = self._end_ready
-        data[BEGUN_KEY] = self._begun
-        self._has_begun = False
-        data.pop(OBSERVATIONS_KEY, None)
-        watch = self._watch(child)
-        self.belief.add_listener(watch)
-        try:
-            watch()  # the start effects may already break the invariant
-            if BEGUN_KEY not in child.get_registered_input_keys():
-                self._begun()  # a skill that does not tell: it begins now
-            try:
-                skill_outcome = self.run_child()
-            finally:
-                self._begun()  # a skill that returned without telling (it failed to begin)
-            if self.before_end is not None and not self._violation:
-                self.before_end()
-        finally:
-            self.belief.remove_listener(watch)
-        record.skill_outcome = skill_outcome
-        outcome = self.skill.map_outcome(skill_outcome) if self.skill else skill_outcome
-        try:
-            observations = normalise_observations(data.pop(OBSERVATIONS_KEY, None))
-        except ValueError as exc:
-            raise smach.InvalidUserCodeError(f"skill {self._path}/{label}: {exc}") from exc
-        if self._violation:
-            outcome = "aborted"
-            record.unmet = ("over all: " + ", ".join(self._violation),)
-        elif outcome == "succeeded":
-            with self.effects_lock:
-                with self.belief.locked() as facts:
-                    unmet = ground.unmet_at_end(facts)
-                    end = ground.end_effects(facts) if not unmet else (set(), set(), {})
-                if not unmet:
-                    self.belief.apply(end[0], end[1])
-                    self.belief.set_values(end[2])
-                    self.in_flight = None  # with its end effects, atomically
-            if unmet:
-                outcome = "aborted"
-                record.unmet = ("at end: " + ", ".join(unmet),)
-            else:
-                self._adopted(observations)
-        if outcome != "succeeded":
-            if self.on_failed is not None:
-                self.on_failed(outcome)
-            self._take_back()
-        self._observe(record, observations)
-        record.outcome = outcome
-        self._ended(outcome)
-        return self._finish(record, started)
-
-    def _take_back(self) -> None:
-        """A step that did not end well undid its start (a robot stopped mid-drive is
-        back where it began): its at-start changes of facts leave the belief; what
-        its skill observed (applied next) wins. Numbers it spent stay spent."""
-        with self.effects_lock:
-            if self.in_flight is not None:
-                removed, added = self.in_flight
-                self.belief.apply(removed, added)
-                self.in_flight = None
-
-    def _end_ready(self) -> None:
-        if self.before_end is not None and not self._violation:
-            self.before_end()
-
-    def _begun(self) -> None:
-        with self._begun_once:
-            if self._has_begun:
-                return
-            self._has_begun = True
-        if self.on_begun is not None:
-            self.on_begun()
-
-    def _watch(self, child: smach.State) -> Callable[[], None]:
-        """A belief listener: preempt the skill when an over-all condition breaks."""
-        ground = self.ground
-        if not ground._lifted.invariant_parts:
-            return lambda: None
-
-        def check() -> None:
-            if self._violation:
-                return
-            unmet = ground.unmet_invariant(self.belief.facts)
-            if unmet:
-                self._violation = unmet
-                child.request_preempt()
-
-        return check
-
-    def _started(self) -> None:
-        self.timing.actual_start = self.clock()
-        self.timing.actual_end = None
-        if self._bus.listeners:
-            t, thread = stamp()
-            self._bus.emit(
-                ActionStarted(
-                    path=self._path,
-                    time=t,
-                    thread=thread,
-                    index=self.index,
-                    action=str(self.ground.step),
-                    planned_start=self.timing.planned_start,
-                    planned_duration=self.timing.planned_duration,
-                    actual_start=self.timing.actual_start,
-                    time_scale=self.time_scale,
-                )
-            )
-
-    def _ended(self, outcome: str) -> None:
-        self.timing.actual_end = self.clock()
-        if self._bus.listeners:
-            t, thread = stamp()
-            self._bus.emit(
-                ActionEnded(
-                    path=self._path,
-                    time=t,
-                    thread=thread,
-                    index=self.index,
-                    action=str(self.ground.step),
-                    outcome=outcome,
-                    planned_start=self.timing.planned_start,
-                    planned_duration=self.timing.planned_duration,
-                    actual_start=self.timing.actual_start or 0.0,
-                    actual_end=self.timing.actual_end,
-                )
-            )
-
-
-# -- the dispatcher ------------------------------------------------------------------------
 
 
 @dataclass
@@ -582,7 +145,7 @@ class _Dispatch:
     sooner)."""
 
 
-class TemporalDispatch(smach.Container):
+class TemporalDispatch(PlanContainer):
     """Runs the steps of a temporal plan as they become ready (see the module doc).
 
     Outcomes: ``succeeded`` when every step succeeded, else the first failing step's
@@ -638,7 +201,7 @@ class TemporalDispatch(smach.Container):
         self._effects_lock = threading.Lock()
         self._order = list(labels)
         for label, state in zip(labels, states, strict=True):
-            self._adopt_child(label, state)
+            self.adopt_child(label, state)
             state.effects_lock = self._effects_lock
             self._states[label] = state
         self._remappers: dict[str, smach.Remapper] = {}
@@ -684,19 +247,13 @@ class TemporalDispatch(smach.Container):
             for edge in waits
         ]
 
-    def set_initial_state(
-        self, initial_states: Sequence[str], userdata: smach.UserData | None = None
-    ) -> None:
-        if userdata is not None:
-            self.userdata.update(userdata)
-
     def consistency_problems(self) -> list[str]:
         # Every child is a step whose own check covers its skill.
         return []
 
-    def _compile(self) -> None:
+    def compile_children(self) -> None:
         self._remappers = {
-            label: self._remapper(label, state, None) for label, state in self._states.items()
+            label: self.child_remapper(label, state) for label, state in self._states.items()
         }
 
     def _terminal_states(self) -> list[str]:
@@ -732,7 +289,7 @@ class TemporalDispatch(smach.Container):
         return rows
 
     # -- execution -------------------------------------------------------------------------
-    def _run(self) -> str | None:
+    def run_children(self) -> str | None:
         clock = self.clock
         with clock.turn(clock.admit(self.DISPATCHER_KEY)):
             return self._run_dispatch()
@@ -756,11 +313,15 @@ class TemporalDispatch(smach.Container):
             return time.monotonic() - t0  # (wall seconds: the viewer's timeline)
 
         for index, state in enumerate(self._states.values()):
-            state.clock = since_start
-            state.time_scale = self.time_scale
-            state.before_end = lambda i=index: self._await_end(run, i)
-            state.on_begun = lambda i=index: self._begun(run, i)
-            state.on_failed = lambda outcome, i=index: self._failed(run, i, outcome)
+            state.bind(
+                StepHooks(
+                    elapsed=since_start,
+                    time_scale=self.time_scale,
+                    before_end=partial(self._await_end, run, index),
+                    on_begun=partial(self._begun, run, index),
+                    on_failed=partial(self._failed, run, index),
+                )
+            )
         self._run_state = run
         self.belief.add_listener(self._poke)
         try:
@@ -903,10 +464,10 @@ class TemporalDispatch(smach.Container):
         state = self._states[label]
         outcome = "aborted"
         try:
-            outcome = self._step(
+            outcome = self.step_child(
                 label, state, self._remappers[label], threading.current_thread().name
             )
-        except BaseException as exc:  # reported by _run in the caller's thread
+        except BaseException as exc:  # reported by run_children in the caller's thread
             with self._wake:
                 run.errors.append(exc)
         with self._wake:
@@ -941,35 +502,17 @@ def compile_temporal(
     model: ActionModel,
     belief: WorldState,
     *,
-    first_index: int = 1,
-    check_preconditions: bool = True,
-    on_finished: Callable[[StepRecord], None] | None = None,
-    variants: Mapping[int, str] | None = None,
     time_scale: float = 0.0,
     on_failure: str = "finish",
-    world: World | None = None,
     clock: Clock | None = None,
+    **options: Unpack[StepOptions],
 ) -> CompiledPlan:
     """A temporal plan as a :class:`TemporalDispatch` of :class:`TimedStepState` steps
-    (labels as for sequential plans: ``03_NAVIGATE_R1_DOCK_HALL``). The dispatch follows
-    ``clock``, by default the clock of ``world`` (the wall clock without one)."""
+    (labels as for sequential plans: ``03_NAVIGATE_R1_DOCK_HALL``; ``options`` as for
+    :func:`~plan_bridge.execution.compile.compile_plan`). The dispatch follows
+    ``clock``, by default the clock of the ``world`` option (the wall clock without one)."""
     steps = list(steps)
-    width = max(2, len(str(first_index + len(steps))))
-    labels = [step_label(first_index + i, s, width) for i, s in enumerate(steps)]
-    states: list[TimedStepState] = []
-    for i, step in enumerate(steps):
-        skill_state, skill = skills.create(step, (variants or {}).get(i))
-        state = TimedStepState(
-            first_index + i,
-            model.ground(step),
-            belief,
-            skill,
-            check_preconditions=check_preconditions,
-            on_finished=on_finished,
-            world=world,
-        )
-        state.add("SKILL", skill_state)
-        states.append(state)
+    labels, states = build_steps(TimedStepState, steps, skills, model, belief, **options)
     dispatch = TemporalDispatch(
         steps,
         states,
@@ -978,7 +521,7 @@ def compile_temporal(
         belief,
         time_scale=time_scale,
         on_failure=on_failure,
-        clock=clock_of(world) if clock is None else clock,
+        clock=clock_of(options.get("world")) if clock is None else clock,
     )
     return CompiledPlan(
         dispatch,

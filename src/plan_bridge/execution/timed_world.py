@@ -44,7 +44,7 @@ from plan_bridge.execution.semantics import GroundAction
 from plan_bridge.execution.simulation import SimulatedWorld
 from plan_bridge.execution.world import values_of
 from plan_bridge.pddl.task import Fact, PlanningTask
-from plan_bridge.planning.planner import PlanStep
+from plan_bridge.planning.types import PlanStep
 from plan_bridge.skills.registry import SkillRegistry
 
 __all__ = ["TimedSkill", "TimedWorld", "timed_skills"]

@@ -24,7 +24,7 @@ from plan_bridge.pddl.task import Fact, FactLike, format_fact, parse_fact
 
 if TYPE_CHECKING:
     from plan_bridge.execution.clock import Clock
-    from plan_bridge.planning.planner import PlanStep
+    from plan_bridge.planning.types import PlanStep
 
 __all__ = [
     "FactSnapshot",

@@ -14,7 +14,7 @@ from collections.abc import Iterable
 from typing import TYPE_CHECKING
 
 from plan_bridge.errors import PddlError
-from plan_bridge.pddl.features import classify, known, requirements_hint
+from plan_bridge.pddl.features import ADL, classify, known, requirements_hint
 
 if TYPE_CHECKING:
     from plan_bridge.pddl.source import SourceText
@@ -22,17 +22,8 @@ if TYPE_CHECKING:
 __all__ = ["UP_REQUIREMENTS", "check_constructs", "did_you_mean"]
 
 #: Requirement flags accepted by the unified-planning 1.3 PDDL grammar.
-UP_REQUIREMENTS = frozenset(
+UP_REQUIREMENTS = ADL | frozenset(
     [
-        ":strips",
-        ":typing",
-        ":negative-preconditions",
-        ":disjunctive-preconditions",
-        ":equality",
-        ":existential-preconditions",
-        ":universal-preconditions",
-        ":quantified-preconditions",
-        ":conditional-effects",
         ":fluents",
         ":numeric-fluents",
         ":adl",

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from functools import cache
 
 __all__ = [
+    "ADL",
     "ENGINES",
     "IMPLIED",
     "Engine",
@@ -211,21 +212,23 @@ _CONSTRUCTS = [  # not requirement flags
 _TABLE = _REQUIREMENTS + _CONSTRUCTS
 _BY_NAME = {support.name: support for support in _TABLE}
 
+#: The flags ``:adl`` stands for.
+ADL = frozenset(
+    [
+        ":strips",
+        ":typing",
+        ":negative-preconditions",
+        ":disjunctive-preconditions",
+        ":equality",
+        ":existential-preconditions",
+        ":universal-preconditions",
+        ":quantified-preconditions",
+        ":conditional-effects",
+    ]
+)
 #: Requirements that imply others (``:adl`` brings ``:negative-preconditions``...).
 IMPLIED = {
-    ":adl": frozenset(
-        [
-            ":strips",
-            ":typing",
-            ":negative-preconditions",
-            ":disjunctive-preconditions",
-            ":equality",
-            ":existential-preconditions",
-            ":universal-preconditions",
-            ":quantified-preconditions",
-            ":conditional-effects",
-        ]
-    ),
+    ":adl": ADL,
     ":quantified-preconditions": frozenset(
         [":existential-preconditions", ":universal-preconditions"]
     ),

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import re
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -197,21 +198,20 @@ def _prepare_for_up(front: FrontEnd) -> None:
     if len(metric) == 3 and isinstance(metric[2], Atom) and metric[2].text == "total-time":
         # UP 1.3 reads the makespan only in parentheses (it fails on the bare word).
         problem_edits.append(Edit(metric[2].offset, metric[2].end, "(total-time)"))
-    front.domain_up = rewrite(
-        domain.source.text,
-        domain.tree,
-        [s for _, s in domain.sections],
-        DOMAIN_ORDER,
-        domain_edits,
-    )
+    front.domain_up = _rewrite(domain, DOMAIN_ORDER, domain_edits)
     added = [] if problem.init is not None else [(":init", "(:init)")]
-    front.problem_up = rewrite(
-        problem.source.text,
-        problem.tree,
-        [s for _, s in problem.sections],
-        PROBLEM_ORDER,
-        problem_edits,
-        added,
+    front.problem_up = _rewrite(problem, PROBLEM_ORDER, problem_edits, added)
+
+
+def _rewrite(
+    model: DomainModel | ProblemModel,
+    order: dict[str, int],
+    edits: Sequence[Edit],
+    added: Sequence[tuple[str, str]] = (),
+) -> Rewritten:
+    """:func:`~plan_bridge.pddl.rewrite.rewrite` of the file ``model`` was read from."""
+    return rewrite(
+        model.source.text, model.tree, [s for _, s in model.sections], order, edits, added
     )
 
 

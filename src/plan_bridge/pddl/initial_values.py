@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
 
 from plan_bridge.pddl.checks import Read, Usage
 from plan_bridge.pddl.diagnostics import Diagnostics
@@ -37,83 +38,112 @@ def check_initial_values(
     reads but ``(:init ...)`` never gives a value: PDDL leaves it undefined."""
     if not usage.reads:
         return
+    init = problem.init.items[1:] if problem.init is not None else []
     defined: dict[str, set[tuple[str, ...]]] = {}
-    if problem.init is not None:
-        for fact in problem.init.items[1:]:
-            if isinstance(fact, Form) and fact.head == "=" and len(fact.items) == 3:
-                target = fact.items[1]
-                if isinstance(target, Form) and target.head:
-                    defined.setdefault(target.head, set()).add(
-                        tuple(a.text for a in target.items[1:] if isinstance(a, Atom))
-                    )
-    names = {**domain.constants, **problem.objects}
-    facts: dict[str, list[tuple[str, ...]]] = {}
-    if problem.init is not None:
-        for fact in problem.init.items[1:]:
-            if isinstance(fact, Form) and fact.head in domain.predicates:
-                facts.setdefault(fact.head, []).append(
-                    tuple(a.text for a in fact.items[1:] if isinstance(a, Atom))
-                )
-    of_type: dict[str, list[str]] = {}
-
-    def objects_of(kind: str) -> list[str]:
-        if kind not in of_type:
-            of_type[kind] = [n for n, e in names.items() if domain.is_subtype(e.type, kind)]
-        return of_type[kind]
-
+    for fact in init:
+        if isinstance(fact, Form) and fact.head == "=" and len(fact.items) == 3:
+            target = fact.items[1]
+            if isinstance(target, Form) and target.head:
+                defined.setdefault(target.head, set()).add(_names(target))
+    grounder = _Grounder(domain, problem)
     metric = problem.metric.items[1:] if problem.metric is not None else []
-    budget = _MAX_INSTANCES
     for function, reads in usage.reads.items():
         if function == "total-cost" and any(
             isinstance(m, Form) and m.head == "total-cost" for m in metric
         ):
             continue  # unified-planning reads it as the actions' costs
-        given = defined.get(function, set())
-        missing: list[tuple[str, ...]] = []
-        count = 0
-        first: Read | None = None
+        undefined = grounder.undefined(reads, defined.get(function, set()))
+        if undefined.first is not None:
+            _warn(problem, diags, function, undefined, undefined.first)
+
+
+def _names(form: Form) -> tuple[str, ...]:
+    """The names after the head: the arguments of a ground atom."""
+    return tuple(a.text for a in form.items[1:] if isinstance(a, Atom))
+
+
+@dataclass
+class _Undefined:
+    """The ground instances of one function that are read but have no initial value."""
+
+    count: int = 0
+    first: Read | None = None
+    """The first read of one of them, for the message."""
+    shown: list[tuple[str, ...]] = field(default_factory=list)
+    """The first three, for the message."""
+
+    def add(self, combination: tuple[str, ...], read: Read) -> None:
+        self.count += 1
+        self.first = self.first or read
+        if len(self.shown) < 3:
+            self.shown.append(combination)
+
+
+class _Grounder:
+    """Grounds reads over the problem's objects, :data:`_MAX_INSTANCES` at most in all."""
+
+    def __init__(self, domain: DomainModel, problem: ProblemModel) -> None:
+        self.domain = domain
+        self.names = {**domain.constants, **problem.objects}
+        self.facts: dict[str, list[tuple[str, ...]]] = {}
+        if problem.init is not None:
+            for fact in problem.init.items[1:]:
+                if isinstance(fact, Form) and fact.head in domain.predicates:
+                    self.facts.setdefault(fact.head, []).append(_names(fact))
+        self.budget = _MAX_INSTANCES
+        self._of_type: dict[str, list[str]] = {}
+
+    def objects_of(self, kind: str) -> list[str]:
+        if kind not in self._of_type:
+            self._of_type[kind] = [
+                n for n, e in self.names.items() if self.domain.is_subtype(e.type, kind)
+            ]
+        return self._of_type[kind]
+
+    def undefined(self, reads: list[Read], given: set[tuple[str, ...]]) -> _Undefined:
+        """The instances ``reads`` may read that are not in ``given``."""
+        found = _Undefined()
         patterns: set[tuple[tuple[tuple[bool, str], ...], int]] = set()
         seen: set[tuple[str, ...]] = set()
         for read in reads:
-            pattern = _pattern(read, names)
+            pattern = _pattern(read, self.names)
             if pattern is None or (pattern, id(read.guards)) in patterns:
                 continue
             patterns.add((pattern, id(read.guards)))
-            pools = [objects_of(kind) if var else [kind] for var, kind in pattern]
-            allowed = _guard_filters(read, facts)
+            pools = [self.objects_of(kind) if var else [kind] for var, kind in pattern]
+            allowed = _guard_filters(read, self.facts)
             for combination in itertools.product(*pools):
-                budget -= 1
-                if budget < 0:
+                self.budget -= 1
+                if self.budget < 0:
                     break
                 if combination in given or combination in seen:
                     continue
-                if not all(test(combination) for test in allowed):
-                    continue
-                seen.add(combination)
-                count += 1
-                first = first or read
-                if len(missing) < 3:
-                    missing.append(combination)
-        if first is None:
-            continue
-        shown = [f"{function}({', '.join(args)})" if args else function for args in missing]
-        listed = ", ".join(shown) + (
-            f" and {count - len(shown)} more" if count > len(shown) else ""
-        )
-        init_at = problem.init.offset if problem.init is not None else problem.tree.offset
-        init_line = problem.source.line_col(init_at)[0]
-        read_line = first.source.line_col(first.offset)[0]
-        example = f"(= ({' '.join([function, *missing[0]])}) VALUE)"
-        diags.warning(
-            problem.source,
-            init_at,
-            f"{listed} {'has' if count == 1 else 'have'} {NO_INITIAL_VALUE} "
-            f"({problem.source.path}:{init_line}); {first.reader} reads "
-            f"{'it' if count == 1 else 'them'} ({first.source.path}:{read_line})",
-            f"add {example} to (:init ...). PDDL leaves a fluent without an initial value "
-            "undefined: a condition that reads it is false and an effect that changes it "
-            "cannot apply, and some engines (TAMER) refuse the problem",
-        )
+                if all(test(combination) for test in allowed):
+                    seen.add(combination)
+                    found.add(combination, read)
+        return found
+
+
+def _warn(
+    problem: ProblemModel, diags: Diagnostics, function: str, undefined: _Undefined, first: Read
+) -> None:
+    count, missing = undefined.count, undefined.shown
+    shown = [f"{function}({', '.join(args)})" if args else function for args in missing]
+    listed = ", ".join(shown) + (f" and {count - len(shown)} more" if count > len(shown) else "")
+    init_at = problem.init.offset if problem.init is not None else problem.tree.offset
+    init_line = problem.source.line_col(init_at)[0]
+    read_line = first.source.line_col(first.offset)[0]
+    example = f"(= ({' '.join([function, *missing[0]])}) VALUE)"
+    diags.warning(
+        problem.source,
+        init_at,
+        f"{listed} {'has' if count == 1 else 'have'} {NO_INITIAL_VALUE} "
+        f"({problem.source.path}:{init_line}); {first.reader} reads "
+        f"{'it' if count == 1 else 'them'} ({first.source.path}:{read_line})",
+        f"add {example} to (:init ...). PDDL leaves a fluent without an initial value "
+        "undefined: a condition that reads it is false and an effect that changes it "
+        "cannot apply, and some engines (TAMER) refuse the problem",
+    )
 
 
 def _pattern(read: Read, names: Mapping[str, Entry]) -> tuple[tuple[bool, str], ...] | None:

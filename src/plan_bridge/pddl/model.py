@@ -111,7 +111,7 @@ _PARTS = {
 }
 
 
-def _header(model: _Common, diags: Diagnostics) -> list[Node]:
+def _header(model: _Common, diags: Diagnostics) -> list[Form]:
     tree, source = model.tree, model.source
     items = tree.items
     if len(items) < 2 or not isinstance(items[1], Form) or items[1].head != source.kind:
@@ -128,7 +128,7 @@ def _header(model: _Common, diags: Diagnostics) -> list[Node]:
     else:
         model.name = header.items[1].text
         model.name_offset = header.items[1].offset
-    body: list[Node] = []
+    body: list[Form] = []
     seen: dict[str, int] = {}
     for item in items[2:]:
         if not isinstance(item, Form) or not item.head.startswith(":"):
@@ -266,7 +266,6 @@ def _declare(
 def read_domain(source: SourceText, diags: Diagnostics) -> DomainModel:
     model = DomainModel(source, read_tree(source))
     for item in _header(model, diags):
-        assert isinstance(item, Form)
         head = item.head
         if head == ":types":
             model.explicit_types = True
@@ -449,7 +448,6 @@ def _check_type_cycles(model: DomainModel, diags: Diagnostics) -> None:
 def read_problem(source: SourceText, diags: Diagnostics) -> ProblemModel:
     model = ProblemModel(source, read_tree(source))
     for item in _header(model, diags):
-        assert isinstance(item, Form)
         head = item.head
         if head == ":domain":
             if len(item.items) == 2 and isinstance(item.items[1], Atom):

@@ -34,6 +34,7 @@ __all__ = [
     "SourceText",
     "check_source",
     "decode_source",
+    "is_number",
     "read_source",
     "replace_init",
 ]
@@ -532,7 +533,7 @@ def replace_init(problem: SourceText, facts: Iterable[Sequence[str]]) -> str:
                     form_start = token.offset
                     nxt = tokens[index + 1].text if index + 1 < len(tokens) else ""
                     after = tokens[index + 2].text if index + 2 < len(tokens) else ""
-                    keep = nxt == "=" or (nxt == "at" and _is_number(after))
+                    keep = nxt == "=" or (nxt == "at" and is_number(after))
                 depth += 1
             elif token.text == ")":
                 depth -= 1
@@ -543,7 +544,8 @@ def replace_init(problem: SourceText, facts: Iterable[Sequence[str]]) -> str:
     raise problem.error("the problem has no (:init ...) section", None)
 
 
-def _is_number(text: str) -> bool:
+def is_number(text: str) -> bool:
+    """Whether ``text`` reads as a number (``2``, ``-0.5``, ``1e3``)."""
     try:
         float(text)
     except ValueError:

@@ -92,8 +92,8 @@ class Parameter:
 
 
 @dataclass(frozen=True)
-class ActionSchema:
-    """A lifted action: its name and typed parameters."""
+class _Schema:
+    """A name with typed parameters."""
 
     name: str
     parameters: tuple[Parameter, ...]
@@ -101,6 +101,11 @@ class ActionSchema:
     @property
     def arity(self) -> int:
         return len(self.parameters)
+
+
+@dataclass(frozen=True)
+class ActionSchema(_Schema):
+    """A lifted action: its name and typed parameters."""
 
     @property
     def parameter_names(self) -> tuple[str, ...]:
@@ -108,15 +113,8 @@ class ActionSchema:
 
 
 @dataclass(frozen=True)
-class PredicateSchema:
+class PredicateSchema(_Schema):
     """A boolean fluent (PDDL predicate) and its typed parameters."""
-
-    name: str
-    parameters: tuple[Parameter, ...]
-
-    @property
-    def arity(self) -> int:
-        return len(self.parameters)
 
 
 class _StepLike(Protocol):
@@ -277,15 +275,7 @@ def load_task(
     check_source(domain_source, max_depth=max_depth)
     problem_source = read_source(problem, "problem", max_bytes=max_bytes)
     check_source(problem_source, max_depth=max_depth)
-    front = analyse(domain_source, problem_source)
-    _prime(prime, front)
-    if before_parse is not None:
-        before_parse()
-    up_problem, notes = parse_with_up(front)
-    task = task_from_problem(
-        up_problem, domain_path=Path(domain), problem_path=Path(problem), warnings=notes
-    )
-    return dataclasses.replace(task, domain_text=front.domain_text, problem_text=front.problem_text)
+    return _parsed(domain_source, problem_source, prime, before_parse, Path(domain), Path(problem))
 
 
 def load_task_from_text(
@@ -303,12 +293,27 @@ def load_task_from_text(
     check_source(domain_source, max_depth=max_depth)
     problem_source = decode_source(problem_text.encode("utf-8"), problem_name, "problem")
     check_source(problem_source, max_depth=max_depth)
+    return _parsed(domain_source, problem_source, prime, before_parse)
+
+
+def _parsed(
+    domain_source: SourceText,
+    problem_source: SourceText,
+    prime: Primer | None,
+    before_parse: Callable[[], object] | None,
+    domain_path: Path | None = None,
+    problem_path: Path | None = None,
+) -> PlanningTask:
+    """The task of two checked sources: the front end's verdict, then unified-planning's
+    parse of its rewrite."""
     front = analyse(domain_source, problem_source)
     _prime(prime, front)
     if before_parse is not None:
         before_parse()
     up_problem, notes = parse_with_up(front)
-    task = task_from_problem(up_problem, warnings=notes)
+    task = task_from_problem(
+        up_problem, domain_path=domain_path, problem_path=problem_path, warnings=notes
+    )
     return dataclasses.replace(task, domain_text=front.domain_text, problem_text=front.problem_text)
 
 

@@ -1,21 +1,25 @@
-"""Stage 2, planning: planners (unified-planning engines), the worker process that runs
-them under a hard time limit, and plans (:class:`PlanResult`, :class:`PlanStep`).
+"""Stage 2, planning: planners under a hard time limit, and the plans they return.
 
-``from plan_bridge.planning import get_planner`` is the public entry; the modules are
-:mod:`~plan_bridge.planning.planner` and :mod:`~plan_bridge.planning.worker`.
+``from plan_bridge.planning import get_planner`` is the public entry. The modules:
+
+* :mod:`.types`: :class:`PlanResult`, :class:`PlanStep`, :class:`PlanStatus` and the
+  :class:`Planner` protocol;
+* :mod:`.registry`: :func:`get_planner` (every planner name) and
+  :func:`installed_planners`;
+* :mod:`.planner`: unified-planning engines (:class:`UPPlanner`);
+* :mod:`.engines`: ``auto`` (the engine by the problem's kind) and the warm search's
+  client (:class:`~plan_bridge.planning.engines.WarmPlanner`);
+* :mod:`.portfolio`: racing Fast Downward configurations;
+* :mod:`.worker` and :mod:`.service`: the worker processes (client and server side);
+* :mod:`.warm`, :mod:`.grounding` and :mod:`.search`: the warm search that runs in
+  them.
 """
 
 from __future__ import annotations
 
-from plan_bridge.planning.planner import (
-    Planner,
-    PlanResult,
-    PlanStatus,
-    PlanStep,
-    UPPlanner,
-    get_planner,
-    installed_planners,
-)
+from plan_bridge.planning.planner import UPPlanner
+from plan_bridge.planning.registry import get_planner, installed_planners
+from plan_bridge.planning.types import Planner, PlanResult, PlanStatus, PlanStep
 
 __all__ = [
     "PlanResult",

@@ -1,220 +1,81 @@
-"""Planners: unified-planning engines behind one protocol, with hard time limits.
+"""Unified-planning engines behind the :class:`~plan_bridge.planning.types.Planner`
+protocol, each solve in a killable worker process.
 
 >>> task = load_task("domain.pddl", "problem.pddl")          # doctest: +SKIP
 >>> result = get_planner("fast-downward").solve(task, timeout=10)  # doctest: +SKIP
 >>> [str(step) for step in result.actions]                  # doctest: +SKIP
 ['(pick ball1 rooma left)', ...]
 
-"No plan" is a :class:`PlanResult`, never an exception: its ``status`` says what
-happened (unsolvable, timeout, unsupported, error) and ``explanation`` says why,
-e.g. the goal atoms that are unreachable even under delete relaxation.
+"No plan" is a :class:`~plan_bridge.planning.types.PlanResult`, never an exception:
+its ``status`` says what happened (unsolvable, timeout, unsupported, error) and
+``explanation`` says why, e.g. the goal atoms that are unreachable even under delete
+relaxation.
 
 Every solve runs in a warm worker process (:mod:`plan_bridge.planning.worker`) that is
-killed at the deadline, so ``timeout`` holds for engines that ignore it.
-
-(Over 600 lines: the protocol, its result types and the unified-planning adapter
-that fills them are read together; the process pool lives in
-:mod:`plan_bridge.planning.worker` and engine choice in :mod:`.engines`.)
+killed at the deadline, so ``timeout`` holds for engines that ignore it. The result
+types live in :mod:`.types` and the names in :mod:`.registry` (both re-exported here
+for older imports); engine choice is :mod:`.engines`.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import enum
 import threading
 import time
 import weakref
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
+from dataclasses import dataclass
+from typing import Any
 
 from plan_bridge.errors import PlannerNotFoundError
 from plan_bridge.pddl.initial_values import NO_INITIAL_VALUE
 from plan_bridge.pddl.reachability import ReachabilityReport, relaxed_unreachable_goals
-from plan_bridge.pddl.task import Fact, FactLike, PlanningTask, format_fact
+from plan_bridge.pddl.task import Fact, FactLike, PlanningTask
 from plan_bridge.pddl.up_runtime import ensure_unified_planning
 from plan_bridge.planning.problem_source import problem_source as _problem_source
-from plan_bridge.planning.worker import SolveReply, WorkerPool, default_pool
+from plan_bridge.planning.registry import (
+    DEFAULT_PLANNER,
+    get_planner,
+    installed_planners,
+    oneshot_planners,
+)
+from plan_bridge.planning.types import (
+    Planner,
+    PlanResult,
+    PlanStatus,
+    PlanStep,
+    snapshot_values,
+)
+from plan_bridge.planning.worker import ProblemText, SolveReply, WorkerPool, default_pool
 
-if TYPE_CHECKING:
-    from plan_bridge.planning.engines import AutoPlanner
-
+# The result types and the registry are re-exported: many modules import them here.
 __all__ = [
     "DEFAULT_PLANNER",
     "PlanResult",
     "PlanStatus",
     "PlanStep",
     "Planner",
+    "SolveRequest",
     "UPPlanner",
     "get_planner",
     "installed_planners",
+    "up_kind",
 ]
-
-DEFAULT_PLANNER = "fast-downward"
 
 # Engines that warn they ignore UP's timeout: the worker kill enforces it anyway,
 # so the warning is noise for our users.
 _IGNORED_WARNINGS = ("does not support timeout",)
 
 
-class PlanStatus(str, enum.Enum):
-    """What a solve ended with."""
-
-    SOLVED = "solved"
-    UNSOLVABLE = "unsolvable"
-    TIMEOUT = "timeout"
-    ERROR = "error"
-    UNSUPPORTED = "unsupported"
-
-
 @dataclass(frozen=True)
-class PlanStep:
-    """One ground action of a plan: ``PlanStep("pick", ("cup", "table"))``.
+class SolveRequest:
+    """What a solve asks of an engine besides the base problem: its true initial atoms,
+    goal atoms and numeric values (``[fluent, *args, number]``), in the PDDL text's
+    names; None keeps the base problem's."""
 
-    Steps of a temporal plan also carry their planned ``start`` and ``duration``
-    (plan time, seconds); they do not take part in equality, so a step is the same
-    action whenever it is planned.
-    """
-
-    action: str
-    arguments: tuple[str, ...] = ()
-    start: float | None = field(default=None, compare=False)
-    duration: float | None = field(default=None, compare=False)
-
-    def __str__(self) -> str:
-        return "(" + " ".join((self.action, *self.arguments)) + ")"
-
-
-@dataclass(frozen=True)
-class PlanResult:
-    """The outcome of one solve."""
-
-    status: PlanStatus
-    actions: list[PlanStep] = field(default_factory=list)
-    planner: str = ""
-    planning_time_s: float = 0.0
-    """Wall-clock time of the whole ``solve`` call (PDDL writing, worker, analysis)."""
-    explanation: str = ""
-    """Why there is no plan (empty when solved)."""
-    warnings: tuple[str, ...] = ()
-    """Warnings of unified-planning and the engine during this solve."""
-    unreachable_goals: tuple[Fact, ...] = ()
-    """Goal atoms unreachable under delete relaxation (when that was the reason)."""
-    engine_status: str = ""
-    """The engine's own status (UP ``PlanGenerationResultStatus`` name)."""
-    engine_time_s: float = 0.0
-    """Time spent in the engine inside the worker."""
-    log: str = ""
-    """The tail of the engine's log."""
-    problem_reused: bool = False
-    """True when the worker derived the problem from one it had parsed before (a
-    replan's fast path: no PDDL parsing)."""
-
-    @property
-    def solved(self) -> bool:
-        return self.status is PlanStatus.SOLVED
-
-    def plan_strings(self) -> list[str]:
-        return [str(step) for step in self.actions]
-
-    @property
-    def temporal(self) -> bool:
-        """Whether the plan is time-triggered (its steps have start times)."""
-        return any(step.start is not None for step in self.actions)
-
-    @property
-    def makespan(self) -> float | None:
-        """When the last action of a temporal plan ends (plan time); None otherwise."""
-        if not self.temporal:
-            return None
-        return max(((s.start or 0.0) + (s.duration or 0.0) for s in self.actions), default=0.0)
-
-    def to_json(self) -> dict[str, Any]:
-        """A JSON-serialisable summary (the shape of ``plan-bridge plan --json``)."""
-        return {
-            "status": self.status.value,
-            "planner": self.planner,
-            "planning_time_s": round(self.planning_time_s, 4),
-            "plan_length": len(self.actions),
-            "plan": self.plan_strings(),
-            "explanation": self.explanation,
-            "unreachable_goals": [format_fact(goal) for goal in self.unreachable_goals],
-            "warnings": list(self.warnings),
-            "engine_status": self.engine_status,
-            **self._timing_json(),
-        }
-
-    def _timing_json(self) -> dict[str, Any]:
-        if not self.temporal:
-            return {}
-        return {
-            "actions": [
-                {"action": str(step), "start": step.start, "duration": step.duration}
-                for step in self.actions
-            ],
-            "makespan": self.makespan,
-        }
-
-
-@runtime_checkable
-class Planner(Protocol):
-    """Anything that turns a :class:`PlanningTask` into a :class:`PlanResult`."""
-
-    @property
-    def name(self) -> str: ...
-
-    def solve(
-        self,
-        task: PlanningTask,
-        *,
-        timeout: float,
-        initial_state: Iterable[FactLike] | None = None,
-        goal: Iterable[FactLike] | None = None,
-    ) -> PlanResult:
-        """Plan for ``task``; ``initial_state`` (true ground facts) replaces the
-        task's initial state for this solve (closed world), and ``goal`` (ground
-        atoms) replaces its goal by their conjunction."""
-        ...
-
-
-def installed_planners() -> list[str]:
-    """Names of the installed unified-planning one-shot planners (meta engines such as
-    ``oversubscription[fast-downward]`` are accepted by :func:`get_planner` too but not
-    listed)."""
-    return [name for name in _oneshot_planners() if "[" not in name]
-
-
-def _oneshot_planners() -> list[str]:
-    ensure_unified_planning()
-    from unified_planning.shortcuts import get_environment  # type: ignore[import-untyped]
-
-    factory = get_environment().factory
-    names = []
-    for name in factory.engines:
-        try:
-            if factory.engine(name).is_oneshot_planner():
-                names.append(name)
-        except Exception:
-            continue
-    return names
-
-
-def get_planner(
-    name: str = DEFAULT_PLANNER,
-    *,
-    pool: WorkerPool | None = None,
-    params: Mapping[str, Any] | None = None,
-    label: str | None = None,
-) -> UPPlanner | AutoPlanner:
-    """The planner called ``name``; raises :class:`PlannerNotFoundError` listing the
-    installed ones if there is none. ``params`` configure the engine, ``label`` names
-    that configuration (see :class:`UPPlanner`). ``"auto"`` chooses the engine from
-    each problem's kind (:class:`~plan_bridge.planning.engines.AutoPlanner`)."""
-    if name == "auto":
-        from plan_bridge.planning.engines import AutoPlanner
-
-        return AutoPlanner(pool=pool)
-    return UPPlanner(name, pool=pool, params=params, label=label)
+    init: list[list[str]] | None = None
+    goal: list[list[str]] | None = None
+    values: list[list[Any]] | None = None
 
 
 class UPPlanner:
@@ -229,6 +90,9 @@ class UPPlanner:
     :attr:`name` (default: the engine name).
     """
 
+    #: Whether the engine writes files (each solve then gets a working directory).
+    needs_workdir = True
+
     def __init__(
         self,
         engine: str = DEFAULT_PLANNER,
@@ -238,9 +102,7 @@ class UPPlanner:
         params: Mapping[str, Any] | None = None,
         label: str | None = None,
     ) -> None:
-        available = _oneshot_planners()
-        if engine not in available:
-            raise PlannerNotFoundError(engine, [n for n in available if "[" not in n])
+        self._check_engine(engine)
         self._engine = engine
         self.params = dict(params or {})
         self._label = label or engine
@@ -249,6 +111,12 @@ class UPPlanner:
         self._unsupported: weakref.WeakKeyDictionary[PlanningTask, list[str]] = (
             weakref.WeakKeyDictionary()
         )
+
+    @staticmethod
+    def _check_engine(engine: str) -> None:
+        available = oneshot_planners()
+        if engine not in available:
+            raise PlannerNotFoundError(engine, [n for n in available if "[" not in n])
 
     @property
     def name(self) -> str:
@@ -274,10 +142,10 @@ class UPPlanner:
     def supporting_engines(self, task: PlanningTask) -> list[str]:
         """Installed planners whose declared capabilities cover ``task``."""
         ensure_unified_planning()
-        from unified_planning.shortcuts import get_environment
+        from unified_planning.shortcuts import get_environment  # type: ignore[import-untyped]
 
         factory = get_environment().factory
-        kind = task.problem.kind
+        kind = up_kind(task)
         return [name for name in installed_planners() if factory.engine(name).supports(kind)]
 
     def _alternatives(self, task: PlanningTask) -> str:
@@ -342,9 +210,7 @@ class UPPlanner:
         if timeout <= 0:
             raise ValueError(f"timeout must be positive, got {timeout!r}")
         started = time.monotonic()
-        if values is None and isinstance(getattr(initial_state, "values", None), Mapping):
-            # A belief's snapshot carries its numbers (plan_bridge.execution.world).
-            values = initial_state.values  # type: ignore[union-attr]
+        values = snapshot_values(initial_state, values)
         facts = (
             None
             if initial_state is None
@@ -379,19 +245,27 @@ class UPPlanner:
                 notes,
             )
         notes.extend(source.notes)
-        with self.pool.worker(prefer=source.text.key) as worker:
-            reply = worker.solve(
-                self._engine,
-                source.text,
-                timeout,
-                init=None if facts is None else [source.pddl_atom(f) for f in sorted(facts)],
-                goal=None if goal_atoms is None else [source.pddl_atom(a) for a in goal_atoms],
-                values=None
-                if not values
-                else [[*source.pddl_atom(atom), float(v)] for atom, v in sorted(values.items())],
-                params=self.params,
-                cancel=cancel,
-            )
+        request = SolveRequest(
+            init=None if facts is None else [source.pddl_atom(f) for f in sorted(facts)],
+            goal=None if goal_atoms is None else [source.pddl_atom(a) for a in goal_atoms],
+            values=None
+            if not values
+            else [[*source.pddl_atom(atom), float(v)] for atom, v in sorted(values.items())],
+        )
+        reply = self._solve_here(task, source.text, request, timeout)
+        if reply is None:
+            with self.pool.worker(prefer=source.text.key) as worker:
+                reply = worker.solve(
+                    self._engine,
+                    source.text,
+                    timeout,
+                    init=request.init,
+                    goal=request.goal,
+                    values=request.values,
+                    params=self.params,
+                    cancel=cancel,
+                    workdir=self.needs_workdir,
+                )
         if reply.outcome == "cancelled":
             return self._finish(
                 view, started, PlanStatus.TIMEOUT, f"{self.name}: {reply.message}", notes
@@ -399,6 +273,13 @@ class UPPlanner:
         notes.extend(w for w in reply.warnings if not any(i in w for i in _IGNORED_WARNINGS))
         result = self._interpret(view, started, timeout, reply, source.writer, notes, missing)
         return dataclasses.replace(result, problem_reused=True) if reply.reused else result
+
+    def _solve_here(
+        self, task: PlanningTask, text: ProblemText, request: SolveRequest, timeout: float
+    ) -> SolveReply | None:
+        """A reply computed in this process instead of a worker (None: use a worker).
+        Engines run in workers; the warm search overrides this for cold starts."""
+        return None
 
     def _unsupported_cached(self, task: PlanningTask) -> list[str]:
         # Computing a UP problem kind takes up to ~0.2 s on large problems; replans of
@@ -447,9 +328,7 @@ class UPPlanner:
                 "",
                 notes,
                 steps=steps,
-                log=reply.log,
-                engine_status=reply.status,
-                engine_time_s=reply.engine_time_s,
+                reply=reply,
             )
         if reply.outcome == "result" and reply.status.startswith("UNSOLVABLE"):
             report = _unreachable(task, self.explain_timeout)
@@ -477,8 +356,7 @@ class UPPlanner:
                 PlanStatus.ERROR,
                 f"{self._engine}: {reply.message}",
                 notes,
-                engine_status=reply.status,
-                engine_time_s=reply.engine_time_s,
+                reply=reply,
             )
         # The engine raised, or returned MEMOUT / INTERNAL_ERROR / UNSUPPORTED_PROBLEM.
         detail = reply.message or reply.log.strip().splitlines()[-1:] or [reply.status]
@@ -499,9 +377,7 @@ class UPPlanner:
                 PlanStatus.UNSUPPORTED,
                 explanation,
                 notes,
-                log=reply.log,
-                engine_status=reply.status,
-                engine_time_s=reply.engine_time_s,
+                reply=reply,
             )
         kind = f"{reply.error_type}: " if reply.error_type else ""
         return self._finish(
@@ -510,9 +386,7 @@ class UPPlanner:
             PlanStatus.ERROR,
             f"{self._engine} failed: {kind}{_first_line(message)}",
             notes,
-            log=reply.log,
-            engine_status=reply.status,
-            engine_time_s=reply.engine_time_s,
+            reply=reply,
         )
 
     def _no_plan(
@@ -546,9 +420,8 @@ class UPPlanner:
             "; ".join(parts),
             notes,
             unreachable_goals=report.unreachable_goals,
+            reply=reply,
             engine_status=reply.status or reply.outcome.upper(),
-            engine_time_s=reply.engine_time_s,
-            log=reply.log,
         )
 
     def _finish(
@@ -561,12 +434,15 @@ class UPPlanner:
         *,
         steps: list[PlanStep] | None = None,
         unreachable_goals: tuple[Fact, ...] = (),
-        engine_status: str = "",
-        engine_time_s: float = 0.0,
-        log: str = "",
+        reply: SolveReply | None = None,
+        engine_status: str | None = None,
     ) -> PlanResult:
+        """The result; ``reply`` gives the engine's status (unless ``engine_status``),
+        time and log."""
         if status in (PlanStatus.UNSOLVABLE, PlanStatus.UNSUPPORTED, PlanStatus.ERROR):
             explanation = _undefined_numbers_first(task, explanation)
+        if engine_status is None:
+            engine_status = "" if reply is None else reply.status
         return PlanResult(
             status=status,
             actions=steps or [],
@@ -576,12 +452,26 @@ class UPPlanner:
             warnings=tuple(dict.fromkeys(notes)),
             unreachable_goals=unreachable_goals,
             engine_status=engine_status,
-            engine_time_s=engine_time_s,
-            log=log,
+            engine_time_s=0.0 if reply is None else reply.engine_time_s,
+            log="" if reply is None else reply.log,
         )
 
 
 _cache_lock = threading.Lock()
+_up_kinds: weakref.WeakKeyDictionary[PlanningTask, Any] = weakref.WeakKeyDictionary()
+
+
+def up_kind(task: PlanningTask) -> Any:
+    """unified-planning's ``ProblemKind`` of ``task``, computed once per task (UP
+    recomputes it on every access: up to ~0.2 s on large problems)."""
+    with _cache_lock:
+        kind = _up_kinds.get(task)
+    if kind is None:
+        ensure_unified_planning()
+        kind = task.problem.kind
+        with _cache_lock:
+            _up_kinds[task] = kind
+    return kind
 
 
 def _undefined_numbers_first(task: PlanningTask, explanation: str) -> str:
@@ -609,7 +499,7 @@ def _lacking(engine_name: str, task: PlanningTask) -> list[str]:
     from unified_planning.shortcuts import get_environment
 
     engine = get_environment().factory.engine(engine_name)
-    kind = task.problem.kind
+    kind = up_kind(task)
     try:
         if engine.supports(kind):
             return []

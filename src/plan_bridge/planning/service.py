@@ -11,6 +11,11 @@ Plans come back as ``[action, [arguments...]]`` for sequential plans and as
 temporal engine (plan time in seconds; ``duration`` is ``None`` for an instantaneous
 action of a temporal plan). Engines that ignore UP's ``timeout`` (TAMER, Kairos,
 pyperplan) are stopped by the client, which kills this process at the deadline.
+
+The engine ``warm-gbfs`` is not a unified-planning engine: the request is answered
+by the warm search (:mod:`plan_bridge.planning.warm`) on the parsed base problem
+itself, with the groundings it keeps per base (no derived copy, no working
+directory); ``params.budget_s`` bounds its grounding and search.
 """
 
 from __future__ import annotations
@@ -23,6 +28,7 @@ from collections import OrderedDict
 from collections.abc import Iterable, Sequence
 from typing import IO, Any
 
+from plan_bridge.planning.warm import WARM, WarmState, solve_warm
 from plan_bridge.planning.worker import BASE_CACHE_SIZE
 
 __all__ = ["main", "serve"]
@@ -51,7 +57,8 @@ def serve(requests: IO[str], replies: IO[str]) -> None:
             replies.flush()
             continue
         try:
-            os.chdir(request["workdir"])
+            if request.get("workdir"):
+                os.chdir(request["workdir"])
             reply = _solve_request(reader, request)
         except Exception as exc:
             reply = {"outcome": "error", "error_type": type(exc).__name__, "message": str(exc)}
@@ -77,6 +84,8 @@ class _Base:
             if fluent_exp.type.is_bool_type() and value.is_bool_constant() and value.is_true()
         }
         self.goal_atoms = _conjunctive_goal(self.problem.goals)
+        #: The warm search's compiled actions and groundings of this problem.
+        self.warm = WarmState()
 
     def derive(
         self,
@@ -195,6 +204,8 @@ def _solve_request(reader: Any, request: dict[str, Any]) -> dict[str, Any]:
         parse_time = _parse_base(reader, request)
     base = _bases[key]
     _bases.move_to_end(key)
+    if request["engine"] == WARM:
+        return {**_warm_request(base, request), "parse_time_s": parse_time, "reused": reused}
     started = time.monotonic()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -223,6 +234,22 @@ def _solve_request(reader: Any, request: dict[str, Any]) -> dict[str, Any]:
         "parse_time_s": parse_time,
         "reused": reused,
     }
+
+
+def _warm_request(base: _Base, request: dict[str, Any]) -> dict[str, Any]:
+    """Plan with the warm search on the base problem itself (no derived copy)."""
+    init = request.get("init")
+    goal = request.get("goal")
+    if request.get("values"):
+        return {"outcome": "result", "status": "UNSUPPORTED_PROBLEM", "message": "numbers"}
+    state = base.true_atoms.keys() if init is None else (tuple(atom) for atom in init)
+    atoms = None if goal is None else [tuple(atom) for atom in goal]
+    # The budget counts from now (the problem is parsed), within the hard time limit.
+    limit = request.get("timeout")
+    budget = (request.get("params") or {}).get("budget_s")
+    if budget is not None:
+        limit = budget if limit is None else min(limit, budget)
+    return solve_warm(base.problem, base.warm, state, atoms, limit)
 
 
 def _plan_entries(plan: Any) -> list[list[Any]]:

@@ -17,6 +17,9 @@ Why a plain subprocess speaking JSON lines, not ``multiprocessing``:
 Workers are kept warm in a :class:`WorkerPool`: unified-planning is imported once
 per worker (about 0.5 s), and a worker is only replaced after it was killed.
 The worker side (what runs in the process) is :mod:`plan_bridge.planning.service`.
+:meth:`WorkerPool.has_ready_worker` tells whether a solve would wait for a worker
+(starting, or parsing a primed problem): the warm search then runs in the calling
+process instead (:mod:`plan_bridge.planning.warm`).
 
 **Replans do not re-parse.** A worker keeps the last :data:`BASE_CACHE_SIZE` parsed
 problems, keyed by a hash of their PDDL text (a :class:`ProblemText`). A request
@@ -114,6 +117,8 @@ class Worker:
         )
         self._replies: queue.Queue[dict[str, Any] | None] = queue.Queue()
         self._ready = threading.Event()
+        # Ids of prime requests whose parse has not finished (the worker is busy).
+        self._parsing: set[int] = set()
         self._reader = threading.Thread(
             target=self._read_replies, name=f"plan-bridge-worker-{self.process.pid}", daemon=True
         )
@@ -141,6 +146,8 @@ class Worker:
                 continue
             if message.get("ready"):
                 self._ready.set()
+            elif message.get("id") in self._parsing:
+                self._parsing.discard(message["id"])  # a prime's parse is done
             else:
                 self._replies.put(message)
         self._ready.set()
@@ -149,6 +156,10 @@ class Worker:
     def is_ready(self) -> bool:
         """Whether the worker has started (imported unified-planning) and serves."""
         return self._ready.is_set() and self.is_alive()
+
+    def is_parsing(self) -> bool:
+        """Whether the worker is still parsing a primed problem."""
+        return bool(self._parsing)
 
     def wait_ready(self, timeout: float = STARTUP_TIMEOUT_S) -> None:
         if not self._ready.wait(timeout) or not self.is_alive():
@@ -173,6 +184,7 @@ class Worker:
         ``missing-base`` and sends the text again.
         """
         self._next_id += 1
+        self._parsing.add(self._next_id)
         line = json.dumps(
             {
                 "op": "parse",
@@ -212,6 +224,7 @@ class Worker:
         engine_timeout: bool = True,
         params: Mapping[str, Any] | None = None,
         cancel: threading.Event | None = None,
+        workdir: bool = True,
     ) -> SolveReply:
         """Solve ``base`` (with ``init`` as its true initial facts and ``goal`` as its
         goal conjunction, when given; ``values``: ``[fluent, *args, number]`` initial
@@ -219,9 +232,10 @@ class Worker:
         ``timeout``. ``params`` go to the engine (UP ``OneshotPlanner(params=...)``,
         e.g. a Fast Downward search configuration); setting ``cancel`` kills the
         worker and returns the outcome ``"cancelled"`` (a portfolio stops the
-        members that lost)."""
+        members that lost). ``workdir=False``: the engine writes no files (the warm
+        search), so the solve gets no working directory."""
         self.wait_ready()
-        workdir = tempfile.mkdtemp(prefix="plan-bridge-solve-")
+        folder = tempfile.mkdtemp(prefix="plan-bridge-solve-") if workdir else None
         request: dict[str, Any] = {
             "engine": engine,
             "base": base.key,
@@ -231,7 +245,7 @@ class Worker:
             # The engine's own limit is a courtesy (Fast Downward then stops cleanly
             # and reports TIMEOUT); the kill below is what makes the limit hard.
             "timeout": timeout if engine_timeout else None,
-            "workdir": workdir,
+            "workdir": folder,
             "params": dict(params) if params else None,
         }
         started = time.monotonic()
@@ -271,7 +285,8 @@ class Worker:
                 reused=bool(reply.get("reused", False)),
             )
         finally:
-            shutil.rmtree(workdir, ignore_errors=True)
+            if folder is not None:
+                shutil.rmtree(folder, ignore_errors=True)
 
     def _remember(self, key: str) -> None:
         self._bases[key] = None
@@ -398,6 +413,12 @@ class WorkerPool:
             while len(self._idle) < count and self._count < self.max_workers:
                 self._idle.append(Worker())
                 self._count += 1
+
+    def has_ready_worker(self) -> bool:
+        """Whether an idle worker has started and is not parsing (a solve would not
+        wait for a process to start or for a parse to end)."""
+        with self._condition:
+            return any(worker.is_ready() and not worker.is_parsing() for worker in self._idle)
 
     def prime(self, base: ProblemText) -> None:
         """Start parsing ``base`` in an idle worker (starting one if the pool may),

@@ -12,7 +12,7 @@ from plan_bridge.execution.world import Observation
 from plan_bridge.robosim.world import RobosimWorld
 
 if TYPE_CHECKING:
-    from plan_bridge.planning.planner import PlanStep
+    from plan_bridge.planning.types import PlanStep
 
 __all__ = ["adopt_step", "restore_world", "snapshot_world"]
 

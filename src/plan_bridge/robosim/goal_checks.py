@@ -12,9 +12,10 @@ certain.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, field
 
 from plan_bridge.pddl.task import Fact
-from plan_bridge.robosim.problem import WorldModel
+from plan_bridge.robosim.problem import RobotInfo, WorldModel
 
 __all__ = ["goal_blockers"]
 
@@ -48,50 +49,70 @@ def goal_blockers(model: WorldModel, goal: Sequence[Fact]) -> list[str]:
     return reasons
 
 
+@dataclass
+class _Wanted:
+    """What a goal asks of each robot and object."""
+
+    where: dict[str, list[str]] = field(default_factory=dict)
+    """Robot or object -> the spots it is to be at."""
+    inside: dict[str, list[str]] = field(default_factory=dict)
+    """Object -> the locations it is to be at."""
+    held: dict[str, list[str]] = field(default_factory=dict)
+    """Object -> the robots to hold it."""
+    holds: dict[str, list[str]] = field(default_factory=dict)
+    """Robot -> the objects it is to hold."""
+    empty: set[str] = field(default_factory=set)
+
+    @classmethod
+    def of(cls, goal: Sequence[Fact]) -> _Wanted:
+        wanted = cls()
+        for fact in goal:
+            name, *args = fact
+            if name == "At":
+                wanted.where.setdefault(args[0], []).append(args[1])
+            elif name == "Has":
+                wanted.inside.setdefault(args[1], []).append(args[0])
+            elif name == "Holding":
+                wanted.held.setdefault(args[1], []).append(args[0])
+                wanted.holds.setdefault(args[0], []).append(args[1])
+            elif name == "HandEmpty":
+                wanted.empty.add(args[0])
+        return wanted
+
+
 def _contradictions(model: WorldModel, goal: Sequence[Fact]) -> list[str]:
     """Atoms of ``goal`` that cannot hold together."""
-    where: dict[str, list[str]] = {}
-    """Robot or object -> the spots it is to be at."""
-    inside: dict[str, list[str]] = {}
-    """Object -> the locations it is to be at."""
-    held: dict[str, list[str]] = {}
-    """Object -> the robots to hold it."""
-    holds: dict[str, list[str]] = {}
-    """Robot -> the objects it is to hold."""
-    empty: set[str] = set()
-    for fact in goal:
-        name, *args = fact
-        if name == "At":
-            where.setdefault(args[0], []).append(args[1])
-        elif name == "Has":
-            inside.setdefault(args[1], []).append(args[0])
-        elif name == "Holding":
-            held.setdefault(args[1], []).append(args[0])
-            holds.setdefault(args[0], []).append(args[1])
-        elif name == "HandEmpty":
-            empty.add(args[0])
-    reasons = []
-    for thing, spots in where.items():
+    wanted = _Wanted.of(goal)
+    return [*_place_clashes(model, wanted), *_hold_clashes(wanted)]
+
+
+def _place_clashes(model: WorldModel, wanted: _Wanted) -> Iterable[str]:
+    """Something to be at two places at once."""
+    for thing, spots in wanted.where.items():
         if len(spots) > 1:
-            reasons.append(f"{thing} cannot be at {' and at '.join(spots)} at once")
-    for obj, locations in inside.items():
+            yield f"{thing} cannot be at {' and at '.join(spots)} at once"
+    for obj, locations in wanted.inside.items():
         if len(locations) > 1:
-            reasons.append(f"{obj} cannot be at {' and at '.join(locations)} at once")
-        for spawn in where.get(obj, []):
+            yield f"{obj} cannot be at {' and at '.join(locations)} at once"
+        for spawn in wanted.where.get(obj, []):
             if spawn in model.spots and model.spots[spawn].gate not in locations:
-                reasons.append(f"{obj} cannot be on {spawn} and at {locations[0]} at once")
-    for obj, robots in held.items():
+                yield f"{obj} cannot be on {spawn} and at {locations[0]} at once"
+
+
+def _hold_clashes(wanted: _Wanted) -> Iterable[str]:
+    """An object held twice or held and placed; a robot holding two or holding none."""
+    where, inside = wanted.where, wanted.inside
+    for obj, robots in wanted.held.items():
         if len(robots) > 1:
-            reasons.append(f"{obj} cannot be held by {' and by '.join(robots)} at once")
+            yield f"{obj} cannot be held by {' and by '.join(robots)} at once"
         if obj in where or obj in inside:
             places = [*where.get(obj, []), *inside.get(obj, [])]
-            reasons.append(f"{obj} cannot be held by {robots[0]} and be at {places[0]}")
-    for robot, objects in holds.items():
+            yield f"{obj} cannot be held by {robots[0]} and be at {places[0]}"
+    for robot, objects in wanted.holds.items():
         if len(objects) > 1:
-            reasons.append(f"{robot} holds one object at a time, not {' and '.join(objects)}")
-        if robot in empty:
-            reasons.append(f"{robot} cannot hold {objects[0]} with its hand empty")
-    return reasons
+            yield f"{robot} holds one object at a time, not {' and '.join(objects)}"
+        if robot in wanted.empty:
+            yield f"{robot} cannot hold {objects[0]} with its hand empty"
 
 
 def _usable(model: WorldModel, gate: str | None) -> bool:
@@ -162,72 +183,115 @@ def _shut_halls(model: WorldModel, reached: Iterable[str]) -> str:
     return f"{', '.join(shut)} {'is' if len(shut) == 1 else 'are'} {_SHUT}"
 
 
-def _blocker(
-    model: WorldModel,
-    fact: Fact,
-    reach: dict[str, set[str]],
-    item: Callable[[str], tuple[set[str], set[str]]],
-) -> str:
+_Reach = dict[str, set[str]]
+"""Robot -> the spots it can drive to."""
+_ItemReach = Callable[[str], tuple[set[str], set[str]]]
+"""Object -> (the spawns it can be brought to, the robots that can hold it)."""
+
+
+def _blocker(model: WorldModel, fact: Fact, reach: _Reach, item: _ItemReach) -> str:
     """Why ``fact`` cannot be made true ("" when it can, as far as this can tell)."""
     name, *args = fact
-    robots = {r.name: r for r in model.robots}
-    if name == "At" and args[0] in robots:
-        robot = robots[args[0]]
-        if args[1] in reach[robot.name]:
-            return ""
-        way = _shut_halls(model, reach[robot.name])
-        return f"{robot.name} cannot get from {robot.spot} to {args[1]}: {way}"
-    if name in ("At", "Has"):
-        obj, targets = (args[0], [args[1]]) if name == "At" else (args[1], [])
-        if name == "Has":
-            targets = [s for s in model.gates[args[0]].spawns if s in model.spots]
-        places, _ = item(obj)
-        if places & set(targets):
-            return ""
-        target = args[1] if name == "At" else args[0]
-        gate = model.spots[args[1]].gate if name == "At" else args[0]
-        if not _usable(model, gate):
-            return f"nothing can be put on {target}: {gate} is {_SHUT}"
-        return _why_stuck(model, obj, target, reach)
-    if name == "Holding":
-        _, holders = item(args[1])
-        if args[0] in holders:
-            return ""
-        return _why_stuck(model, args[1], args[0], reach)
-    if name == "HandEmpty":
-        robot = robots[args[0]]
-        if robot.holding is None or any(
-            model.spots[s].kind == "spawn" and _usable(model, model.spots[s].gate)
-            for s in reach[robot.name]
-        ):
-            return ""
-        return f"{robot.name} holds {robot.holding} and can reach no open location to put it"
-    if name == "IsOpen":
-        info = model.gates[args[0]]
-        if info.is_open:
-            return ""
-        if info.is_locked:
-            return f"{info.name} is {_SHUT}"
-        spots = {s.name for s in model.spots.values() if s.gate == info.name}
-        if any(spots & reach[r] for r in robots):
-            return ""
-        return f"no robot can get to {info.name}: {_shut_halls(model, _anyone(reach))}"
-    if name == "IsLocked":
-        if model.gates[args[0]].is_locked:
-            return ""
-        return (
-            f"{args[0]} is not locked and no robot action locks (pyrobosim's robots "
-            f"navigate, pick, place, open, close and detect; only the world's events lock: "
-            f"--events with lock:)"
-        )
-    if name == "Searched":
-        spot = model.spots[args[0]]
-        if not _usable(model, spot.gate):
-            return f"{args[0]} cannot be searched: {spot.gate} is {_SHUT}"
-        if any(args[0] in reach[r] for r in robots):
-            return ""
-        return f"no robot can get to {args[0]}: {_shut_halls(model, _anyone(reach))}"
-    return ""
+    if name == "At" and args[0] in reach:
+        return _robot_at_blocker(model, args, reach, item)
+    check = _BLOCKERS.get(name)
+    return check(model, args, reach, item) if check is not None else ""
+
+
+def _robot_at_blocker(model: WorldModel, args: list[str], reach: _Reach, item: _ItemReach) -> str:
+    robot = _robot(model, args[0])
+    if args[1] in reach[robot.name]:
+        return ""
+    way = _shut_halls(model, reach[robot.name])
+    return f"{robot.name} cannot get from {robot.spot} to {args[1]}: {way}"
+
+
+def _robot(model: WorldModel, name: str) -> RobotInfo:
+    return {r.name: r for r in model.robots}[name]
+
+
+def _object_at_blocker(model: WorldModel, args: list[str], reach: _Reach, item: _ItemReach) -> str:
+    obj, spawn = args
+    places, _ = item(obj)
+    if spawn in places:
+        return ""
+    return _placement_blocker(model, obj, spawn, model.spots[spawn].gate, reach)
+
+
+def _has_blocker(model: WorldModel, args: list[str], reach: _Reach, item: _ItemReach) -> str:
+    location, obj = args
+    places, _ = item(obj)
+    if places & {s for s in model.gates[location].spawns if s in model.spots}:
+        return ""
+    return _placement_blocker(model, obj, location, location, reach)
+
+
+def _placement_blocker(
+    model: WorldModel, obj: str, target: str, gate: str | None, reach: _Reach
+) -> str:
+    if not _usable(model, gate):
+        return f"nothing can be put on {target}: {gate} is {_SHUT}"
+    return _why_stuck(model, obj, target, reach)
+
+
+def _holding_blocker(model: WorldModel, args: list[str], reach: _Reach, item: _ItemReach) -> str:
+    _, holders = item(args[1])
+    if args[0] in holders:
+        return ""
+    return _why_stuck(model, args[1], args[0], reach)
+
+
+def _hand_empty_blocker(model: WorldModel, args: list[str], reach: _Reach, item: _ItemReach) -> str:
+    robot = _robot(model, args[0])
+    if robot.holding is None or any(
+        model.spots[s].kind == "spawn" and _usable(model, model.spots[s].gate)
+        for s in reach[robot.name]
+    ):
+        return ""
+    return f"{robot.name} holds {robot.holding} and can reach no open location to put it"
+
+
+def _open_blocker(model: WorldModel, args: list[str], reach: _Reach, item: _ItemReach) -> str:
+    info = model.gates[args[0]]
+    if info.is_open:
+        return ""
+    if info.is_locked:
+        return f"{info.name} is {_SHUT}"
+    spots = {s.name for s in model.spots.values() if s.gate == info.name}
+    if any(spots & reach[r] for r in reach):
+        return ""
+    return f"no robot can get to {info.name}: {_shut_halls(model, _anyone(reach))}"
+
+
+def _locked_blocker(model: WorldModel, args: list[str], reach: _Reach, item: _ItemReach) -> str:
+    if model.gates[args[0]].is_locked:
+        return ""
+    return (
+        f"{args[0]} is not locked and no robot action locks (pyrobosim's robots "
+        f"navigate, pick, place, open, close and detect; only the world's events lock: "
+        f"--events with lock:)"
+    )
+
+
+def _searched_blocker(model: WorldModel, args: list[str], reach: _Reach, item: _ItemReach) -> str:
+    spot = model.spots[args[0]]
+    if not _usable(model, spot.gate):
+        return f"{args[0]} cannot be searched: {spot.gate} is {_SHUT}"
+    if any(args[0] in reach[r] for r in reach):
+        return ""
+    return f"no robot can get to {args[0]}: {_shut_halls(model, _anyone(reach))}"
+
+
+#: Per predicate, why an atom of it cannot be made true (``At`` of a robot aside).
+_BLOCKERS: dict[str, Callable[[WorldModel, list[str], _Reach, _ItemReach], str]] = {
+    "At": _object_at_blocker,
+    "Has": _has_blocker,
+    "Holding": _holding_blocker,
+    "HandEmpty": _hand_empty_blocker,
+    "IsOpen": _open_blocker,
+    "IsLocked": _locked_blocker,
+    "Searched": _searched_blocker,
+}
 
 
 def _anyone(reach: dict[str, set[str]]) -> set[str]:

@@ -342,6 +342,30 @@ def _allowed() -> str:
 
 
 def _goal_atom(atom: Any, model: WorldModel) -> Fact:
+    predicate, args, shown = _goal_words(atom)
+    words = _GoalWords(shown, args, [_kind(name, model, shown) for name in args])
+    if predicate == "At":
+        return _at_goal(words, model)
+    if predicate == "Holding":
+        words.need(0, ("robot",), GOAL_FORMS[2])
+        words.need(1, ("object",), GOAL_FORMS[2])
+    elif predicate == "HandEmpty":
+        words.need(0, ("robot",), GOAL_FORMS[3])
+    elif predicate in ("IsOpen", "IsLocked"):
+        words.need(0, ("hallway", "location"), GOAL_FORMS[4 if predicate == "IsOpen" else 5])
+    elif predicate == "Has":
+        words.need(1, ("object",), GOAL_FORMS[6])
+        if words.kinds[0] == "spawn":
+            return ("At", args[1], args[0])
+        words.need(0, ("location",), GOAL_FORMS[6])
+    elif predicate == "Searched":
+        words.need(0, ("spawn",), GOAL_FORMS[7])
+    return (predicate, *args)
+
+
+def _goal_words(atom: Any) -> tuple[str, list[str], str]:
+    """The predicate (as the domain spells it), the arguments and the atom as shown in
+    messages, after checking the atom's form, predicate and arity."""
     if isinstance(atom, list) and atom and str(atom[0]).lower() == "not":
         raise GoalError(
             f"goal atom {_show(atom)}: negated goals are not modelled (pyrobosim's goal "
@@ -363,52 +387,47 @@ def _goal_atom(atom: Any, model: WorldModel) -> Fact:
     if len(args) != arity:
         forms = [f for f in GOAL_FORMS if f.startswith(f"({predicate} ")]
         raise GoalError(f"goal atom {shown}: {predicate} takes {arity} name(s): {', '.join(forms)}")
-    kinds = [_kind(name, model, shown) for name in args]
-    robots = {r.name for r in model.robots}
+    return predicate, args, shown
 
-    def need(index: int, allowed: Sequence[str], form: str) -> None:
-        if kinds[index] not in allowed:
+
+@dataclass(frozen=True)
+class _GoalWords:
+    """A goal atom's arguments with what each names (robot, room, spawn...)."""
+
+    shown: str
+    args: list[str]
+    kinds: list[str]
+
+    def need(self, index: int, allowed: Sequence[str], form: str) -> None:
+        if self.kinds[index] not in allowed:
             raise GoalError(
-                f"goal atom {shown}: {args[index]} is a {kinds[index]}; the form is {form}"
+                f"goal atom {self.shown}: {self.args[index]} is a {self.kinds[index]}; "
+                f"the form is {form}"
             )
 
-    if predicate == "At":
-        if args[0] in robots:
-            if kinds[1] == "location":
-                spawns = model.gates[args[1]].spawns
-                if len(spawns) != 1:
-                    raise GoalError(
-                        f"goal atom {shown}: location {args[1]} has the object spawns "
-                        f"{', '.join(spawns) or 'none'}; name the one the robot goes to"
-                    )
-                return ("At", args[0], spawns[0])
-            if kinds[1] == "hallway":
-                a, b = model.hall_ends[args[1]]
-                raise GoalError(
-                    f"goal atom {shown}: a robot stands at one end of a hallway: {a} or {b}"
-                )
-            need(1, ("room", "spawn", "door"), GOAL_FORMS[0])
-            return ("At", args[0], args[1])
-        need(0, ("object",), GOAL_FORMS[1])
+
+def _at_goal(words: _GoalWords, model: WorldModel) -> Fact:
+    """``(At ROBOT PLACE)`` or ``(At OBJECT PLACE)``; a location stands for its spawn."""
+    args, kinds, shown = words.args, words.kinds, words.shown
+    if args[0] not in {r.name for r in model.robots}:
+        words.need(0, ("object",), GOAL_FORMS[1])
         if kinds[1] == "location":
             return ("Has", args[1], args[0])
-        need(1, ("spawn",), GOAL_FORMS[1])
+        words.need(1, ("spawn",), GOAL_FORMS[1])
         return ("At", args[0], args[1])
-    if predicate == "Holding":
-        need(0, ("robot",), GOAL_FORMS[2])
-        need(1, ("object",), GOAL_FORMS[2])
-    elif predicate == "HandEmpty":
-        need(0, ("robot",), GOAL_FORMS[3])
-    elif predicate in ("IsOpen", "IsLocked"):
-        need(0, ("hallway", "location"), GOAL_FORMS[4 if predicate == "IsOpen" else 5])
-    elif predicate == "Has":
-        need(1, ("object",), GOAL_FORMS[6])
-        if kinds[0] == "spawn":
-            return ("At", args[1], args[0])
-        need(0, ("location",), GOAL_FORMS[6])
-    elif predicate == "Searched":
-        need(0, ("spawn",), GOAL_FORMS[7])
-    return (predicate, *args)
+    if kinds[1] == "location":
+        spawns = model.gates[args[1]].spawns
+        if len(spawns) != 1:
+            raise GoalError(
+                f"goal atom {shown}: location {args[1]} has the object spawns "
+                f"{', '.join(spawns) or 'none'}; name the one the robot goes to"
+            )
+        return ("At", args[0], spawns[0])
+    if kinds[1] == "hallway":
+        a, b = model.hall_ends[args[1]]
+        raise GoalError(f"goal atom {shown}: a robot stands at one end of a hallway: {a} or {b}")
+    words.need(1, ("room", "spawn", "door"), GOAL_FORMS[0])
+    return ("At", args[0], args[1])
 
 
 def _show(atom: Any) -> str:
@@ -448,49 +467,9 @@ def problem_text(model: WorldModel, goal: Sequence[Fact], name: str | None = Non
         by_type.setdefault(gate.kind, []).append(gate.name)
     facts: list[str] = []
     numbers: list[str] = []
-    for robot in model.robots:
-        facts.append(f"(At {robot.name} {robot.spot})")
-        facts.append(f"(bot-ready {robot.name})")
-        facts.append(
-            f"(Holding {robot.name} {robot.holding})"
-            if robot.holding
-            else f"(HandEmpty {robot.name})"
-        )
-        numbers.append(f"(= (battery-level {robot.name}) {_num(robot.battery)})")
-        numbers.append(f"(= (drain-per-metre {robot.name}) {_num(robot.drain)})")
-        numbers.append(f"(= (top-speed {robot.name}) {_num(robot.speed)})")
-    for item, spawn in sorted(model.items.items()):
-        if spawn is not None and spawn in model.spots:
-            facts.append(f"(At {item} {spawn})")
-            fixture = model.spots[spawn].gate
-            if fixture is not None:
-                facts.append(f"(Has {fixture} {item})")
-    for gate in model.gates.values():
-        if gate.is_open:
-            facts.append(f"(IsOpen {gate.name})")
-        if gate.is_locked:
-            facts.append(f"(IsLocked {gate.name})")
-        if gate.is_charger:
-            facts.append(f"(is-charger {gate.name})")
-        for spawn in gate.spawns:
-            if spawn in model.spots:
-                facts.append(f"(spawn-of {spawn} {gate.name})")
-    for spot in model.spots.values():
-        if spot.gate is not None:
-            facts.append(f"(reaches-gate {spot.name} {spot.gate})")
-    rooms: dict[str, list[str]] = {}
-    for spot in model.spots.values():
-        rooms.setdefault(spot.room, []).append(spot.name)
-    for members in rooms.values():
-        for a in members:
-            for b in members:
-                if a != b:
-                    facts.append(f"(same-room {a} {b})")
-                    numbers.append(f"(= (metres {a} {b}) {_num(_length(model, a, b))})")
-    for hall, (a, b) in model.hall_ends.items():
-        for first, second in ((a, b), (b, a)):
-            facts.append(f"(hall-ends {first} {second} {hall})")
-            numbers.append(f"(= (metres {first} {second}) {_num(_length(model, a, b))})")
+    _robot_facts(model, facts, numbers)
+    _item_and_gate_facts(model, facts)
+    _distance_facts(model, facts, numbers)
     objects = "\n    ".join(
         f"{' '.join(names)} - {kind}" for kind, names in by_type.items() if names
     )
@@ -504,6 +483,59 @@ def problem_text(model: WorldModel, goal: Sequence[Fact], name: str | None = Non
         f"  (:init\n    " + "\n    ".join([*facts, *numbers]) + ")\n"
         f"  (:goal (and {goal_text})))\n"
     )
+
+
+def _robot_facts(model: WorldModel, facts: list[str], numbers: list[str]) -> None:
+    for robot in model.robots:
+        facts.append(f"(At {robot.name} {robot.spot})")
+        facts.append(f"(bot-ready {robot.name})")
+        facts.append(
+            f"(Holding {robot.name} {robot.holding})"
+            if robot.holding
+            else f"(HandEmpty {robot.name})"
+        )
+        numbers.append(f"(= (battery-level {robot.name}) {_num(robot.battery)})")
+        numbers.append(f"(= (drain-per-metre {robot.name}) {_num(robot.drain)})")
+        numbers.append(f"(= (top-speed {robot.name}) {_num(robot.speed)})")
+
+
+def _item_and_gate_facts(model: WorldModel, facts: list[str]) -> None:
+    """Where the items are; which hallways and locations are open, locked, chargers;
+    which spawns belong to a location and which spots reach a gate."""
+    for item, spawn in sorted(model.items.items()):
+        if spawn is not None and spawn in model.spots:
+            facts.append(f"(At {item} {spawn})")
+            fixture = model.spots[spawn].gate
+            if fixture is not None:
+                facts.append(f"(Has {fixture} {item})")
+    for gate in model.gates.values():
+        flags = (
+            ("IsOpen", gate.is_open),
+            ("IsLocked", gate.is_locked),
+            ("is-charger", gate.is_charger),
+        )
+        facts.extend(f"({predicate} {gate.name})" for predicate, on in flags if on)
+        facts.extend(
+            f"(spawn-of {spawn} {gate.name})" for spawn in gate.spawns if spawn in model.spots
+        )
+    for spot in model.spots.values():
+        if spot.gate is not None:
+            facts.append(f"(reaches-gate {spot.name} {spot.gate})")
+
+
+def _distance_facts(model: WorldModel, facts: list[str], numbers: list[str]) -> None:
+    """The spots of one room reach each other; a hallway joins its two ends."""
+    rooms: dict[str, list[str]] = {}
+    for spot in model.spots.values():
+        rooms.setdefault(spot.room, []).append(spot.name)
+    for members in rooms.values():
+        for a, b in itertools.permutations(members, 2):
+            facts.append(f"(same-room {a} {b})")
+            numbers.append(f"(= (metres {a} {b}) {_num(_length(model, a, b))})")
+    for hall, (a, b) in model.hall_ends.items():
+        for first, second in ((a, b), (b, a)):
+            facts.append(f"(hall-ends {first} {second} {hall})")
+            numbers.append(f"(= (metres {first} {second}) {_num(_length(model, a, b))})")
 
 
 def _length(model: WorldModel, a: str, b: str) -> float:

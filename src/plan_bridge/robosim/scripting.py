@@ -271,6 +271,11 @@ def locked_halls(world: RobosimWorld) -> list[str]:
 KEYS = ["blocked", "legs"]
 
 
+def _machine(*outcomes: str) -> smach.StateMachine:
+    """A machine of :data:`KEYS` with ``outcomes`` and ``preempted``."""
+    return smach.StateMachine(outcomes=[*outcomes, "preempted"], input_keys=KEYS, output_keys=KEYS)
+
+
 def deliver(
     world: RobosimWorld, robot: str, item: str, target: str, charger: str | None = None
 ) -> smach.StateMachine:
@@ -281,9 +286,7 @@ def deliver(
     if source is None:
         raise ValueError(f"{item} is held at the start: nothing to carry")
     location, target_location = model.spots[source].gate or "", model.spots[target].gate or ""
-    sm = smach.StateMachine(
-        outcomes=["done", "aborted", "preempted"], input_keys=KEYS, output_keys=KEYS
-    )
+    sm = _machine("done", "aborted")
     with sm:
         smach.StateMachine.add(
             "GO_TO_OBJECT",
@@ -318,9 +321,7 @@ def go_to(
 ) -> smach.StateMachine:
     """``CHECK_BATTERY -> DRIVE`` (another way when blocked), charging first when the
     battery is low: outcomes ``arrived``, ``failed``, ``preempted``."""
-    sm = smach.StateMachine(
-        outcomes=["arrived", "failed", "preempted"], input_keys=KEYS, output_keys=KEYS
-    )
+    sm = _machine("arrived", "failed")
     with sm:
         smach.StateMachine.add(
             "CHECK_BATTERY",

@@ -41,7 +41,7 @@ from plan_bridge.robosim.loading import load_world_file, quiet_stdout
 from plan_bridge.robosim.problem import WorldModel, describe_world
 
 if TYPE_CHECKING:
-    from plan_bridge.planning.planner import PlanStep
+    from plan_bridge.planning.types import PlanStep
 
 __all__ = ["ACTION_SECONDS", "ActionResult", "RobosimWorld"]
 

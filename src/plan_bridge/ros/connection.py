@@ -26,8 +26,8 @@ import smach
 from plan_bridge.errors import PlanBridgeError
 from plan_bridge.execution.clock import WALL_CLOCK, Clock
 from plan_bridge.execution.world import Observation
-from plan_bridge.planning.planner import PlanStep
-from plan_bridge.ros.protocol import task_digest
+from plan_bridge.planning.types import PlanStep
+from plan_bridge.ros.protocol import HEARTBEAT_TIMEOUT, HEARTBEAT_TOPIC, task_digest
 from plan_bridge.ros.skills import remote_info, ros_skills
 from plan_bridge.skills.registry import SkillRegistry
 
@@ -110,6 +110,8 @@ class RobotConnection:
         self._ready = threading.Event()
         self._pump_thread: threading.Thread | None = None
         self._knowledge_services: list[KnowledgeServices] = []
+        #: When the robot's heartbeat was last heard (None: not yet).
+        self._last_beat: float | None = None
 
     # -- life cycle -------------------------------------------------------------------
     def open(self) -> RobotConnection:
@@ -141,6 +143,7 @@ class RobotConnection:
         self.node = rclpy.create_node(
             f"plan_bridge_executive_{os.getpid()}_{next(_nodes)}", context=self.context
         )
+        self._listen_to_heartbeat()
         try:
             self.robot_info = remote_info(self.node, prefix=self.prefix, timeout=self.wait_timeout)
         except RuntimeError as exc:
@@ -173,6 +176,26 @@ class RobotConnection:
             f"{info.get('seed')}, fail rate {info.get('fail_rate')}"
             + (f", time scale {info['time_scale']}" if info.get("time_scale") is not None else "")
         )
+
+    def _listen_to_heartbeat(self) -> None:
+        """Hear the robot's heartbeat (protocol.HEARTBEAT_TOPIC) on smach's helper node,
+        which is spun whether or not anybody spins ``self.node``."""
+        from smach.ros._api import StringMsg
+        from smach.ros.executor import SmachExecutor, subscription_events
+
+        helper = SmachExecutor.for_node(self.node)
+        topic = f"/{self.prefix}/{HEARTBEAT_TOPIC}"
+        helper.node.create_subscription(
+            StringMsg,
+            topic,
+            self._on_beat,
+            1,
+            callback_group=helper.callback_group,
+            event_callbacks=subscription_events(topic),
+        )
+
+    def _on_beat(self, message: Any) -> None:
+        self._last_beat = time.monotonic()
 
     def _target_path(self) -> str:
         folder = getattr(self.target, "folder", None)
@@ -262,13 +285,21 @@ class RobotConnection:
         """Why the robot node is gone (None while it is there).
 
         A robot started here is gone when its process exited; any robot when its
-        ``info`` service left the ROS graph (a crashed process leaves it when its
-        DDS lease expires: 2 s for ``skill_server``'s default ``--lease``).
+        heartbeat, once heard, stopped for ``HEARTBEAT_TIMEOUT`` (3 s: the project's
+        own check, whatever the middleware), or when its ``info`` service left the ROS
+        graph (a crashed process leaves it when its DDS lease expires: 2 s for
+        ``skill_server``'s default ``--lease``).
         """
         if self.process is not None and self.process.poll() is not None:
             return f"the robot node exited (code {self.process.returncode})"
         if self.node is None:
             return "not connected"
+        last = self._last_beat
+        if last is not None and time.monotonic() - last > HEARTBEAT_TIMEOUT:
+            return (
+                f"the robot node under /{self.prefix} sent no heartbeat for "
+                f"{time.monotonic() - last:.1f} s"
+            )
         wanted = f"/{self.prefix}/info"
         if not any(name == wanted for name, _ in self.node.get_service_names_and_types()):
             return f"the robot node under /{self.prefix} left the ROS graph"
@@ -278,7 +309,8 @@ class RobotConnection:
         """The executive's skills: ROS clients of the robot's actions.
 
         While the robot node is gone (:meth:`lost`), a step aborts at once instead
-        of waiting ``server_wait_timeout`` for it, so the executive's recovery
+        of waiting ``server_wait_timeout`` for it (a running step within two liveness
+        checks, 0.5 s apart), so the executive's recovery
         (retry, replan) ends quickly, ``aborted``; a robot that comes back is used
         again.
         """
@@ -287,6 +319,8 @@ class RobotConnection:
             self.target.task,
             prefix=self.prefix,
             server_wait_timeout=self.server_wait_timeout,
+            # A running step aborts as soon as the robot is gone by our own checks.
+            peer_alive=lambda: self.lost() is None,
         )
         remote = registry.fallback
         assert remote is not None

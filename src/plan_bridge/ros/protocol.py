@@ -31,7 +31,11 @@ passes: ``response.int64_value`` is :data:`PERFORM_DONE` (``bool_value`` and the
 result in ``string_value``, as ``report``) or :data:`PERFORM_RUNNING`. The client asks
 again with the same id until done; a repeated id never runs the action twice. So a
 reply lost on the way (Fast DDS drops one when the server has not yet matched a new
-client's reply reader) costs one resend, never a mission. Id 0 performs at once and
+client's reply reader) costs one resend, never a mission.
+``heartbeat`` (topic, ``std_msgs/String``: a counter) is published by the robot node
+every :data:`HEARTBEAT_PERIOD` seconds; an executive that heard it and then hears
+nothing for :data:`HEARTBEAT_TIMEOUT` seconds takes the robot for gone, whatever the
+DDS lease of the robot's process (its own check, the same on every middleware). Id 0 performs at once and
 replies when done (one blocking call). ``facts`` (``std_srvs/Trigger``) returns
 the JSON list of the facts true in the simulated world; ``info`` (``Trigger``) returns
 a JSON object describing the robot node (see :func:`task_digest` and
@@ -55,6 +59,9 @@ from plan_bridge.pddl.task import Fact, PlanningTask, format_fact, parse_fact
 
 __all__ = [
     "FACTS_SERVICE",
+    "HEARTBEAT_PERIOD",
+    "HEARTBEAT_TIMEOUT",
+    "HEARTBEAT_TOPIC",
     "INFO_SERVICE",
     "MAX_PAYLOAD",
     "MAX_PERFORM_HOLD",
@@ -78,6 +85,12 @@ REPORT_SERVICE = "report"
 PERFORM_SERVICE = "perform"
 FACTS_SERVICE = "facts"
 INFO_SERVICE = "info"
+#: Topic below the prefix: the robot node's heartbeat, every HEARTBEAT_PERIOD s.
+HEARTBEAT_TOPIC = "heartbeat"
+HEARTBEAT_PERIOD = 0.25
+#: Silence (s) after which an executive that heard the heartbeat takes the robot for
+#: gone: twelve beats, room for a robot process starved of CPU for a while.
+HEARTBEAT_TIMEOUT = 3.0
 #: ``perform`` replies: ``response.int64_value`` is one of these.
 PERFORM_RUNNING = 0
 PERFORM_DONE = 1

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import dataclasses
 import os
 import signal
 import sys
@@ -25,11 +26,12 @@ from plan_bridge.ros.lease import select_short_lease
 from plan_bridge.ros.pacing import Pacer, pace
 from plan_bridge.ros.skill_server import SkillServer
 from smach.ros._api import ExternalShutdownException, MultiThreadedExecutor, rclpy
+from smach.ros.executor import wait_for_callbacks
 
 __all__ = ["main"]
 
 
-def main(argv: Sequence[str] | None = None) -> int:
+def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="python -m plan_bridge.ros.skill_server",
         description="A simulated robot node: serve a domain's actions as ROS 2 actions. A "
@@ -89,34 +91,38 @@ def main(argv: Sequence[str] | None = None) -> int:
         action="store_true",
         help="exit when the process that started this one exits (used by plan-bridge run --ros)",
     )
-    args = parser.parse_args(argv)
-    if args.problem and args.problem_file:
-        parser.error("give the problem either as PROBLEM or as --problem, not both")
-    if args.fail_rate is not None and not 0.0 <= args.fail_rate <= 1.0:
-        parser.error(f"--fail-rate must be between 0 and 1, got {args.fail_rate}")
-    if args.time_scale < 0:
-        parser.error(f"--time-scale must be >= 0, got {args.time_scale}")
+    return parser
 
+
+@dataclasses.dataclass
+class _Robot:
+    """What the robot node serves: the loaded target, its world and how it runs."""
+
+    target: Any
+    setup: Any
+    world: Any
+    fail_rate: float
+    symbolic: bool
+    robosim: bool
+    pacer: Pacer | None
+
+
+def _load(args: argparse.Namespace) -> _Robot:
+    """Load the target and build its world; PlanBridgeError or OSError if that fails."""
     from plan_bridge.missions.mission import load_target
     from plan_bridge.missions.world_target import WorldTarget
 
-    try:
-        target = load_target(
-            args.target, args.problem or args.problem_file, goal=args.goal, events=args.events
-        )
-        robosim = isinstance(target, WorldTarget)
-        symbolic = not target.has_own_skills
-        fail_rate = args.fail_rate if args.fail_rate is not None else (0.0 if symbolic else 0.1)
-        setup = target.setup(seed=args.seed, fail_rate=fail_rate)
-        if not symbolic:
-            problems = setup.skills.check(target.task)
-            if problems:
-                raise PlanBridgeError(
-                    "the skills do not fit the domain:\n  " + "\n  ".join(problems)
-                )
-    except (PlanBridgeError, OSError) as exc:
-        print(f"skill_server: {exc}", file=sys.stderr, flush=True)
-        return 2
+    target = load_target(
+        args.target, args.problem or args.problem_file, goal=args.goal, events=args.events
+    )
+    robosim = isinstance(target, WorldTarget)
+    symbolic = not target.has_own_skills
+    fail_rate = args.fail_rate if args.fail_rate is not None else (0.0 if symbolic else 0.1)
+    setup = target.setup(seed=args.seed, fail_rate=fail_rate)
+    if not symbolic:
+        problems = setup.skills.check(target.task)
+        if problems:
+            raise PlanBridgeError("the skills do not fit the domain:\n  " + "\n  ".join(problems))
     world: Any = setup.world
     pacer = None
     if robosim:
@@ -129,8 +135,53 @@ def main(argv: Sequence[str] | None = None) -> int:
     if not symbolic and not robosim:
         pacer = Pacer(args.time_scale)
         pace(world, pacer)
+    return _Robot(target, setup, world, fail_rate, symbolic, robosim, pacer)
 
+
+def _meta(args: argparse.Namespace, robot: _Robot) -> dict[str, Any]:
+    """What the robot's ``info`` service tells about its run."""
+    target = robot.target
+    meta: dict[str, Any] = {
+        "target": target.name,
+        "problem": target.problem_path.name,
+        "seed": args.seed,
+        "fail_rate": robot.fail_rate,
+        "time_scale": args.time_scale if not robot.symbolic else None,
+        "action_time": args.action_time if robot.symbolic else None,
+    }
+    if robot.robosim:
+        meta.update(goal=target.goal_text, goal_name=target.goal_name, events=args.events)
+    return meta
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = _parser()
+    args = parser.parse_args(argv)
+    if args.problem and args.problem_file:
+        parser.error("give the problem either as PROBLEM or as --problem, not both")
+    if args.fail_rate is not None and not 0.0 <= args.fail_rate <= 1.0:
+        parser.error(f"--fail-rate must be between 0 and 1, got {args.fail_rate}")
+    if args.time_scale < 0:
+        parser.error(f"--time-scale must be >= 0, got {args.time_scale}")
+    try:
+        robot = _load(args)
+    except (PlanBridgeError, OSError) as exc:
+        print(f"skill_server: {exc}", file=sys.stderr, flush=True)
+        return 2
     profile = select_short_lease(args.lease)
+    try:
+        _serve(args, robot)
+    finally:
+        if robot.robosim:
+            robot.world.close()
+        if profile is not None:
+            with contextlib.suppress(OSError):
+                profile.unlink()
+    return 0
+
+
+def _serve(args: argparse.Namespace, robot: _Robot) -> None:
+    """Serve the robot's skills on a node until SIGINT/SIGTERM (or the parent exits)."""
     parent = os.getppid()
     rclpy.init()
     node = rclpy.create_node(args.node_name)
@@ -140,27 +191,15 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     server = SkillServer(
         node,
-        world,
-        task=target.task if robosim else None,
+        robot.world,
+        task=robot.target.task if robot.robosim else None,
         prefix=args.prefix,
         action_time=args.action_time,
         log=say,
-        skills=None if symbolic else setup.skills,
-        pacer=pacer,
-        concurrent=bool(setup.concurrent) and not symbolic,
-        meta={
-            "target": target.name,
-            "problem": target.problem_path.name,
-            "seed": args.seed,
-            "fail_rate": fail_rate,
-            "time_scale": args.time_scale if not symbolic else None,
-            "action_time": args.action_time if symbolic else None,
-            **(
-                {"goal": target.goal_text, "goal_name": target.goal_name, "events": args.events}
-                if isinstance(target, WorldTarget)
-                else {}
-            ),
-        },
+        skills=None if robot.symbolic else robot.setup.skills,
+        pacer=robot.pacer,
+        concurrent=bool(robot.setup.concurrent) and not robot.symbolic,
+        meta=_meta(args, robot),
     )
     executor = MultiThreadedExecutor(num_threads=4)
     executor.add_node(node)
@@ -176,14 +215,12 @@ def main(argv: Sequence[str] | None = None) -> int:
                 break
     except ExternalShutdownException:
         pass
-    say(f"faults {world.faults_injected}")
+    say(f"faults {robot.world.faults_injected}")
+    # Halt the skills, let the callbacks still running end (nothing spins any more),
+    # then destroy: a service or action destroyed under its callback fails it.
+    server.halt_all()
+    wait_for_callbacks(executor, 5.0)
+    executor.shutdown(timeout_sec=0)
     server.destroy()
-    executor.shutdown(timeout_sec=1)
     node.destroy_node()
     rclpy.try_shutdown()
-    if robosim:
-        world.close()
-    if profile is not None:
-        with contextlib.suppress(OSError):
-            profile.unlink()
-    return 0

@@ -54,10 +54,12 @@ from plan_bridge.execution.semantics import ActionModel
 from plan_bridge.execution.simulation import SimulatedWorld
 from plan_bridge.execution.world import Observation, normalise_observations
 from plan_bridge.pddl.task import Fact, PlanningTask, parse_fact
-from plan_bridge.planning.planner import PlanStep
+from plan_bridge.planning.types import PlanStep
 from plan_bridge.ros.pacing import Pacer, Run
 from plan_bridge.ros.protocol import (
     FACTS_SERVICE,
+    HEARTBEAT_PERIOD,
+    HEARTBEAT_TOPIC,
     INFO_SERVICE,
     MAX_PERFORM_HOLD,
     PERFORM_DONE,
@@ -78,7 +80,9 @@ from smach.ros._api import (
     CancelResponse,
     GoalResponse,
     ReentrantCallbackGroup,
+    StringMsg,
 )
+from smach.ros.executor import publisher_events
 
 if TYPE_CHECKING:
     from plan_bridge.robosim.world import RobosimWorld
@@ -183,6 +187,15 @@ class SkillServer:
                     trigger, f"{self.prefix}/{name}", callback, callback_group=self._group
                 )
             )
+        # The heartbeat (protocol.HEARTBEAT_TOPIC): beats while the node is spun.
+        beat_topic = f"{self.prefix}/{HEARTBEAT_TOPIC}"
+        self._beats = 0
+        self._heartbeat = node.create_publisher(
+            StringMsg, beat_topic, 1, event_callbacks=publisher_events(beat_topic)
+        )
+        self._beat_timer = node.create_timer(
+            HEARTBEAT_PERIOD, self._beat, callback_group=self._group
+        )
 
     @property
     def mode(self) -> str:
@@ -391,16 +404,10 @@ class SkillServer:
                 handle.publish_feedback(self._fibonacci.Feedback(sequence=[tick * 10]))
                 time.sleep(self.action_time / 10)
             ok, observations = self._perform_symbolically(step)
-        with self._lock:
-            self._reports[ticket] = encode_result(
-                ok, observations, "" if ok else "the action failed in the simulated world"
-            )
-        if ok:
-            handle.succeed()
-            self._log(f"succeeded {step}")
-        else:
-            handle.abort()
-            self._log(f"failed {step}")
+        report = encode_result(
+            ok, observations, "" if ok else "the action failed in the simulated world"
+        )
+        self._end_goal(handle, step, ticket, report, "succeeded" if ok else "aborted")
         return result
 
     # -- domain skills ----------------------------------------------------------------------------
@@ -422,8 +429,16 @@ class SkillServer:
         finally:
             with self._lock:
                 self._runs.pop(key, None)
+        self._end_goal(handle, step, ticket, text, outcome)
+        return result
+
+    def _end_goal(
+        self, handle: Any, step: PlanStep, ticket: int, report: str, outcome: str
+    ) -> None:
+        """Keep the ``report`` for ``ticket`` and end the goal by ``outcome``: succeeded,
+        canceled (preempted after a cancel request), else aborted."""
         with self._lock:
-            self._reports[ticket] = text
+            self._reports[ticket] = report
         if outcome == "succeeded":
             handle.succeed()
             self._log(f"succeeded {step}")
@@ -433,7 +448,6 @@ class SkillServer:
         else:
             handle.abort()
             self._log(f"failed {step}")
-        return result
 
     def _run_skill(
         self,
@@ -505,8 +519,14 @@ class SkillServer:
             if state is not None:
                 state.request_preempt()
 
+    def _beat(self) -> None:
+        self._beats += 1
+        self._heartbeat.publish(StringMsg(data=str(self._beats)))
+
     def destroy(self) -> None:
         self.halt_all()
+        self.node.destroy_timer(self._beat_timer)
+        self.node.destroy_publisher(self._heartbeat)
         for server in self._servers:
             server.destroy()
         for service in self._services:

@@ -5,11 +5,12 @@ from __future__ import annotations
 import json
 import secrets
 import time
+from collections.abc import Callable
 from typing import Any
 
 import smach
 from plan_bridge.pddl.task import PlanningTask
-from plan_bridge.planning.planner import PlanStep
+from plan_bridge.planning.types import PlanStep
 from plan_bridge.ros.protocol import (
     FACTS_SERVICE,
     INFO_SERVICE,
@@ -40,6 +41,7 @@ def ros_skill(
     server_wait_timeout: float = 10.0,
     exec_timeout: float | None = None,
     preempt_timeout: float = 10.0,
+    peer_alive: Callable[[], bool] | None = None,
 ) -> smach.State:
     """The state that performs ``step`` on the skill server under ``prefix``.
 
@@ -53,6 +55,9 @@ def ros_skill(
     PERFORM asking ``PREFIX/perform`` about one request id until the action is done
     (a lost reply is sent again; ``exec_timeout`` and a preempt abandon the call
     and the robot finishes the action).
+    ``peer_alive()``: the caller's own check that the robot lives (a heartbeat, its
+    process), given to every state, so a call or goal in progress aborts when it
+    answers false twice in a row, without waiting for the robot's DDS lease.
     """
     fibonacci, basic_types, _ = interfaces()
     text = str(step)
@@ -71,7 +76,9 @@ def ros_skill(
         return outcome
 
     if transport == "service":
-        return _performed_skill(node, text, read_result, prefix, server_wait_timeout, exec_timeout)
+        return _performed_skill(
+            node, text, read_result, prefix, server_wait_timeout, exec_timeout, peer_alive
+        )
     if transport != "action":
         raise ValueError(f"unknown transport {transport!r}; transports: {', '.join(TRANSPORTS)}")
 
@@ -106,19 +113,25 @@ def ros_skill(
         # Without a result (server gone, goal rejected) there is nobody to ask.
         return "failed" if status == GoalStatus.STATUS_ABORTED else None
 
+    def idempotent(service: str, wait: float, **callbacks: Any) -> ServiceState:
+        """A call of ``PREFIX/service`` sent again when no answer came (see above)."""
+        return ServiceState(
+            node,
+            f"{prefix}/{service}",
+            basic_types,
+            server_wait_timeout=wait,
+            call_timeout=quick,
+            call_attempts=3,
+            peer_alive=peer_alive,
+            **callbacks,
+        )
+
     sm = smach.StateMachine(outcomes=outcomes, output_keys=["observations"])
     with sm:
         smach.StateMachine.add(
             "SUBMIT",
-            ServiceState(
-                node,
-                f"{prefix}/{SUBMIT_SERVICE}",
-                basic_types,
-                request=submit,
-                response_cb=take_ticket,
-                server_wait_timeout=server_wait_timeout,
-                call_timeout=quick,
-                call_attempts=3,
+            idempotent(
+                SUBMIT_SERVICE, server_wait_timeout, request=submit, response_cb=take_ticket
             ),
             transitions={"succeeded": "RUN", "refused": "aborted"},
         )
@@ -134,6 +147,7 @@ def ros_skill(
                 preempt_timeout=preempt_timeout,
                 result_cb=ran_and_failed,
                 outcomes=["failed"],
+                peer_alive=peer_alive,
             ),
             # A failed action still reports what the robot saw.
             transitions={"succeeded": "REPORT", "failed": "REPORT_FAILURE"},
@@ -141,15 +155,8 @@ def ros_skill(
         for label, final in (("REPORT", None), ("REPORT_FAILURE", "aborted")):
             smach.StateMachine.add(
                 label,
-                ServiceState(
-                    node,
-                    f"{prefix}/{REPORT_SERVICE}",
-                    basic_types,
-                    request_cb=ticket_request,
-                    response_cb=read_result,
-                    server_wait_timeout=report_wait,
-                    call_timeout=quick,
-                    call_attempts=3,
+                idempotent(
+                    REPORT_SERVICE, report_wait, request_cb=ticket_request, response_cb=read_result
                 ),
                 transitions={} if final is None else {"succeeded": final},
             )
@@ -163,6 +170,7 @@ def _performed_skill(
     prefix: str,
     server_wait_timeout: float,
     exec_timeout: float | None,
+    peer_alive: Callable[[], bool] | None,
 ) -> smach.StateMachine:
     """The service transport's skill: ``perform`` polled under one request id."""
     _, basic_types, _ = interfaces()
@@ -211,6 +219,7 @@ def _performed_skill(
                 server_wait_timeout=server_wait_timeout,
                 call_timeout=PERFORM_HOLD + grace,
                 call_attempts=3,
+                peer_alive=peer_alive,
             ),
             transitions={"running": "PERFORM"},
         )

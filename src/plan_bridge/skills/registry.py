@@ -30,7 +30,7 @@ from plan_bridge.errors import PlanBridgeError
 if TYPE_CHECKING:
     from plan_bridge.execution.world import World
     from plan_bridge.pddl.task import PlanningTask
-    from plan_bridge.planning.planner import PlanStep
+    from plan_bridge.planning.types import PlanStep
 
 __all__ = ["REQUIRED_OUTCOMES", "STEP_KEYS", "Skill", "SkillError", "SkillRegistry"]
 
@@ -244,7 +244,7 @@ class SkillRegistry:
         Each skill is built once with example arguments (objects of the right types)
         to check its outcomes, so factories should only construct states.
         """
-        from plan_bridge.planning.planner import PlanStep
+        from plan_bridge.planning.types import PlanStep
 
         problems: list[str] = []
         for name in sorted(self._skills):

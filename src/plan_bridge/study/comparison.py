@@ -21,6 +21,7 @@ from collections import defaultdict
 from collections.abc import Iterable
 from typing import Any
 
+from plan_bridge.study.runs import cell_number
 from plan_bridge.study.statistics import (
     fisher_exact,
     holm,
@@ -38,13 +39,6 @@ METRICS = {
     "wall_time": ("wall_time_s", "wall time of successful runs (s)"),
     "sim_time": ("sim_time_s", "simulated time of successful runs (s)"),
 }
-
-
-def _float(value: str) -> float:
-    try:
-        return float(value)
-    except (TypeError, ValueError):
-        return 0.0
 
 
 def format_p(p: float | str) -> str:
@@ -76,7 +70,7 @@ def compare_approaches(
         lambda: defaultdict(list)
     )
     for row in rows:
-        cell = (row["target"], row["variant"], _float(row["fault_rate"]))
+        cell = (row["target"], row["variant"], cell_number(row["fault_rate"]))
         cells[cell][row["approach"]].append(row)
     out: list[dict[str, Any]] = []
     for (target, variant, rate), by_approach in sorted(cells.items()):
@@ -114,8 +108,8 @@ def compare_approaches(
             )
             for metric in ("wall_time", "sim_time"):
                 column = METRICS[metric][0]
-                ref = [_float(r[column]) for r in ref_rows if r["goal_reached"] == "True"]
-                other = [_float(r[column]) for r in other_rows if r["goal_reached"] == "True"]
+                ref = [cell_number(r[column]) for r in ref_rows if r["goal_reached"] == "True"]
+                other = [cell_number(r[column]) for r in other_rows if r["goal_reached"] == "True"]
                 result = _time_comparison(ref, other)
                 out.append(
                     {

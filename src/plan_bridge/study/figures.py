@@ -14,7 +14,7 @@ from collections import defaultdict
 from pathlib import Path
 from typing import Any
 
-from plan_bridge.study.runs import APPROACHES
+from plan_bridge.study.runs import APPROACHES, cell_number
 
 __all__ = ["DPI", "Figure", "draw_figures"]
 
@@ -34,13 +34,6 @@ class Figure:
 def _order(approaches: set[str]) -> list[str]:
     known = list(APPROACHES)
     return sorted(approaches, key=lambda a: (known.index(a) if a in known else 99, a))
-
-
-def _float(value: str) -> float:
-    try:
-        return float(value)
-    except (TypeError, ValueError):
-        return 0.0
 
 
 def _panel_title(target: str, variant: str) -> str:
@@ -163,7 +156,7 @@ def _times(
     import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D
 
-    rates = sorted({_float(r["fault_rate"]) for r in rows})
+    rates = sorted({cell_number(r["fault_rate"]) for r in rows})
     offsets = dict(zip(approaches, _offsets(len(approaches), 0.7), strict=True))
     fig, axes = plt.subplots(
         2, len(targets), figsize=(4.4 * len(targets), 6.4), squeeze=False, sharex=True
@@ -172,7 +165,7 @@ def _times(
         cell: dict[tuple[str, float], list[dict[str, str]]] = defaultdict(list)
         for r in rows:
             if r["target"] == target and r["variant"] == variant:
-                cell[(r["approach"], _float(r["fault_rate"]))].append(r)
+                cell[(r["approach"], cell_number(r["fault_rate"]))].append(r)
         for row_i, (column, ylabel) in enumerate(
             (("sim_time_s", "simulated robot time (s)"), ("wall_time_s", "wall time (s, log)"))
         ):
@@ -187,7 +180,7 @@ def _times(
                     xs = [
                         i + offsets[approach] + 0.05 * (k / max(1, n - 1) - 0.5) for k in range(n)
                     ]
-                    ys = [_float(r[column]) for r in items]
+                    ys = [cell_number(r[column]) for r in items]
                     ok = [r["goal_reached"] == "True" for r in items]
                     color, marker = style[approach]["color"], style[approach]["marker"]
                     ax.scatter(
@@ -211,7 +204,7 @@ def _times(
                     )
             ax.set_ylabel(ylabel, fontsize=8)
             if column == "wall_time_s":
-                if any(_float(r[column]) > 0 for items in cell.values() for r in items):
+                if any(cell_number(r[column]) > 0 for items in cell.values() for r in items):
                     ax.set_yscale("log")
                 ax.set_xlabel("fault rate")
             else:
@@ -253,7 +246,7 @@ def _planning(
     import matplotlib.pyplot as plt
 
     planned = [a for a in approaches if APPROACHES.get(a, ("", ""))[1]]
-    rates = sorted({_float(r["fault_rate"]) for r in rows})
+    rates = sorted({cell_number(r["fault_rate"]) for r in rows})
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.8))
     ax = axes[0]
     step = min((b - a for a, b in itertools.pairwise(rates)), default=0.1)
@@ -262,12 +255,14 @@ def _planning(
         xs, ys = [], []
         for rate in rates:
             items = [
-                r for r in rows if r["approach"] == approach and _float(r["fault_rate"]) == rate
+                r
+                for r in rows
+                if r["approach"] == approach and cell_number(r["fault_rate"]) == rate
             ]
-            wall = sum(_float(r["wall_time_s"]) for r in items)
+            wall = sum(cell_number(r["wall_time_s"]) for r in items)
             if wall:
                 xs.append(rate + offsets[approach])
-                ys.append(100 * sum(_float(r["planning_time_s"]) for r in items) / wall)
+                ys.append(100 * sum(cell_number(r["planning_time_s"]) for r in items) / wall)
         ax.plot(xs, ys, label=approach, linewidth=1, markersize=4, **style[approach])
     ax.set_xlabel("fault rate")
     ax.set_xticks(rates)
@@ -283,7 +278,9 @@ def _planning(
         for approach in planned:
             items = [r for r in rows if r["approach"] == approach]
             values.append(
-                sum(_float(r[f"absorbed_{layer}"]) for r in items) / len(items) if items else 0.0
+                sum(cell_number(r[f"absorbed_{layer}"]) for r in items) / len(items)
+                if items
+                else 0.0
             )
         ax.bar(planned, values, bottom=bottoms, label=layer, color=f"C{n}", alpha=0.8)
         bottoms = [b + v for b, v in zip(bottoms, values, strict=True)]

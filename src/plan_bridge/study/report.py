@@ -20,7 +20,7 @@ from typing import Any
 from plan_bridge.study.comparison import compare_approaches, format_p
 from plan_bridge.study.environment import PLANNER_PACKAGES, read_sessions
 from plan_bridge.study.figures import draw_figures
-from plan_bridge.study.runs import APPROACHES, TEMPORAL_TIME_SCALE, target_of
+from plan_bridge.study.runs import APPROACHES, TEMPORAL_TIME_SCALE, cell_number, target_of
 from plan_bridge.study.statistics import median_ci, wilson
 
 __all__ = ["authoring_cost", "fault_model", "summarise_results", "wilson", "write_report"]
@@ -28,34 +28,29 @@ __all__ = ["authoring_cost", "fault_model", "summarise_results", "wilson", "writ
 NA = "n/a"
 
 
-def _f(value: str) -> float:
-    try:
-        return float(value)
-    except (TypeError, ValueError):
-        return 0.0
-
-
 def summarise_results(rows: Iterable[dict[str, str]]) -> list[dict[str, Any]]:
     groups: dict[tuple[str, str, str, float], list[dict[str, str]]] = defaultdict(list)
     for row in rows:
-        groups[(row["target"], row["variant"], row["approach"], _f(row["fault_rate"]))].append(row)
+        groups[
+            (row["target"], row["variant"], row["approach"], cell_number(row["fault_rate"]))
+        ].append(row)
     summary = []
     for (target, variant, approach, rate), items in sorted(groups.items()):
         ok = [r for r in items if r["goal_reached"] == "True"]
         low, high = wilson(len(ok), len(items))
-        planning = sum(_f(r["planning_time_s"]) for r in items)
-        total = sum(_f(r["wall_time_s"]) for r in items)
+        planning = sum(cell_number(r["planning_time_s"]) for r in items)
+        total = sum(cell_number(r["wall_time_s"]) for r in items)
 
         def mean_ok(column: str, digits: int, ok: list[dict[str, str]] = ok) -> float | str:
-            return round(sum(_f(r[column]) for r in ok) / len(ok), digits) if ok else NA
+            return round(sum(cell_number(r[column]) for r in ok) / len(ok), digits) if ok else NA
 
         def mean_reported(column: str, ok: list[dict[str, str]] = ok) -> float | str:
             # A world that does not report the number: '' (not 0).
-            values = [_f(r[column]) for r in ok if r.get(column)]
+            values = [cell_number(r[column]) for r in ok if r.get(column)]
             return round(sum(values) / len(values), 3) if values else NA if not ok else ""
 
         wall: tuple[float | str, ...] = (
-            tuple(round(v, 4) for v in median_ci([_f(r["wall_time_s"]) for r in ok]))
+            tuple(round(v, 4) for v in median_ci([cell_number(r["wall_time_s"]) for r in ok]))
             if ok
             else (NA, NA, NA)
         )
@@ -81,16 +76,22 @@ def summarise_results(rows: Iterable[dict[str, str]]) -> list[dict[str, Any]]:
                 "mean_battery_used": mean_reported("battery_used"),
                 "mean_steps": mean_ok("steps", 2),
                 "mean_actions": mean_ok("actions_executed", 2),
-                "mean_faults": round(sum(_f(r["faults_injected"]) for r in items) / len(items), 2),
-                "planning_share": round(planning / total, 4) if total else 0.0,
-                "mean_replans": round(sum(_f(r["replans"]) for r in items) / len(items), 2),
-                "mean_planner_calls": round(
-                    sum(_f(r.get("planner_calls", "")) for r in items) / len(items), 2
+                "mean_faults": round(
+                    sum(cell_number(r["faults_injected"]) for r in items) / len(items), 2
                 ),
-                "mean_repairs": round(sum(_f(r.get("repairs", "")) for r in items) / len(items), 2),
+                "planning_share": round(planning / total, 4) if total else 0.0,
+                "mean_replans": round(
+                    sum(cell_number(r["replans"]) for r in items) / len(items), 2
+                ),
+                "mean_planner_calls": round(
+                    sum(cell_number(r.get("planner_calls", "")) for r in items) / len(items), 2
+                ),
+                "mean_repairs": round(
+                    sum(cell_number(r.get("repairs", "")) for r in items) / len(items), 2
+                ),
                 **{
                     f"absorbed_{layer}": round(
-                        sum(_f(r[f"absorbed_{layer}"]) for r in items) / len(items), 3
+                        sum(cell_number(r[f"absorbed_{layer}"]) for r in items) / len(items), 3
                     )
                     for layer in ("skill", "retry", "continue", "repair", "replan")
                 },
@@ -144,7 +145,7 @@ def _structure_size(state: Any) -> tuple[int, int]:
 
 def authoring_cost(target_path: str, problem: str = "") -> list[dict[str, Any]]:
     """Lines of code, states and transitions, and PDDL size per approach of a target."""
-    from plan_bridge.planning.planner import PlanStep
+    from plan_bridge.planning.types import PlanStep
 
     target = target_of(target_path, problem)
     folder = target.folder or Path(target_path).parent
@@ -239,7 +240,7 @@ def _setup_section(
     fault_models: dict[str, dict[str, float]],
 ) -> list[str]:
     seeds = [int(r["seed"]) for r in rows if r["seed"].lstrip("-").isdigit()]
-    rates = sorted({_f(r["fault_rate"]) for r in rows})
+    rates = sorted({cell_number(r["fault_rate"]) for r in rows})
     per_cell = sorted({s["runs"] for s in summary})
     approaches = sorted({r["approach"] for r in rows}, key=lambda a: list(APPROACHES).index(a))
     lines = [
@@ -387,7 +388,7 @@ def write_report(
         "|---|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for s in summary:
-        name = f"{s['target']} ({s['variant']})" if s["variant"] else s["target"]
+        name = _cell_name(s)
         median = (
             NA
             if s["median_wall_time_s"] == NA
@@ -428,6 +429,11 @@ def write_report(
     return path
 
 
+def _cell_name(row: dict[str, Any]) -> str:
+    """The target of a table row, with its variant of the world when it has one."""
+    return f"{row['target']} ({row['variant']})" if row["variant"] else str(row["target"])
+
+
 def _comparison_section(comparisons: list[dict[str, Any]]) -> list[str]:
     if not comparisons:
         return []
@@ -445,7 +451,7 @@ def _comparison_section(comparisons: list[dict[str, Any]]) -> list[str]:
         "|---|---:|---|---|---|---|---|---|---|---:|---:|",
     ]
     for c in comparisons:
-        name = f"{c['target']} ({c['variant']})" if c["variant"] else c["target"]
+        name = _cell_name(c)
         lines.append(
             f"| {name} | {c['fault_rate']:g} | {c['approach']} | {c['metric']} | "
             f"{c['n_reference']} / {c['n_approach']} | {c['value_reference']} | "

@@ -35,6 +35,7 @@ __all__ = [
     "FIELDS",
     "VARYING_FIELDS",
     "RunSpec",
+    "cell_number",
     "failure_row",
     "inapplicable",
     "is_temporal",
@@ -451,6 +452,14 @@ def read_results(path: Path) -> list[dict[str, str]]:
         return []
     with path.open(newline="", encoding="utf-8") as f:
         return [row for row in csv.DictReader(f) if row.get("outcome")]
+
+
+def cell_number(value: str) -> float:
+    """A cell of ``results.csv`` as a number: 0 when it is empty or not a number."""
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return 0.0
 
 
 def _upgrade_header(path: Path) -> None:

@@ -19,8 +19,12 @@ from __future__ import annotations
 
 import argparse
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING, TypeVar
+
+if TYPE_CHECKING:
+    from smach.introspection.source import Source
 
 __all__ = [
     "add_moment",
@@ -37,35 +41,38 @@ __all__ = [
 EXIT_OK = 0
 EXIT_BAD_INPUT = 2
 
+_N = TypeVar("_N", int, float)
+
+
+def _number(
+    text: str, convert: Callable[[str], _N], kind: str, fits: Callable[[_N], bool], bounds: str
+) -> _N:
+    """``text`` read by ``convert``: an argparse error names ``kind`` or the ``bounds``."""
+    try:
+        value = convert(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected {kind}, got {text!r}") from None
+    if not fits(value):
+        raise argparse.ArgumentTypeError(f"expected {bounds}, got {text!r}")
+    return value
+
 
 def _port(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a port number, got {text!r}") from None
-    if not 0 <= value <= 65535:
-        raise argparse.ArgumentTypeError(f"expected a port number 0..65535, got {text!r}")
-    return value
+    return _number(text, int, "a port number", lambda v: 0 <= v <= 65535, "a port number 0..65535")
 
 
 def _seconds(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected seconds (a number), got {text!r}") from None
-    if not 0 <= value < float("inf"):
-        raise argparse.ArgumentTypeError(f"expected a number of seconds >= 0, got {text!r}")
-    return value
+    return _number(
+        text,
+        float,
+        "seconds (a number)",
+        lambda v: 0 <= v < float("inf"),
+        "a number of seconds >= 0",
+    )
 
 
 def _count(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
-    return value
+    return _number(text, int, "a whole number", lambda v: v >= 0, "a number >= 0")
 
 
 def add_moment(parser: argparse.ArgumentParser) -> None:
@@ -91,9 +98,8 @@ def configure_export(parser: argparse.ArgumentParser, *, format_required: bool =
     parser.add_argument("-o", "--output", metavar="FILE", help="write to FILE (default: stdout)")
 
 
-def configure_view(parser: argparse.ArgumentParser) -> None:
-    """Arguments of ``view`` (journal, --port, --host, --follow)."""
-    parser.add_argument("journal", metavar="RUN.jsonl", help="a journal (JSON lines)")
+def _add_listen(parser: argparse.ArgumentParser) -> None:
+    """--port and --host of the page's server."""
     parser.add_argument(
         "--port", type=_port, default=0, help="port to listen on (default: a free one)"
     )
@@ -102,6 +108,12 @@ def configure_view(parser: argparse.ArgumentParser) -> None:
         default="127.0.0.1",
         help="address to bind (default 127.0.0.1; anything else exposes the page to the network)",
     )
+
+
+def configure_view(parser: argparse.ArgumentParser) -> None:
+    """Arguments of ``view`` (journal, --port, --host, --follow)."""
+    parser.add_argument("journal", metavar="RUN.jsonl", help="a journal (JSON lines)")
+    _add_listen(parser)
     parser.add_argument(
         "--follow", action="store_true", help="keep reading lines appended to the journal"
     )
@@ -112,14 +124,7 @@ def configure_ros(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "server", metavar="SERVER_NAME", help="the name given to IntrospectionServer"
     )
-    parser.add_argument(
-        "--port", type=_port, default=0, help="port to listen on (default: a free one)"
-    )
-    parser.add_argument(
-        "--host",
-        default="127.0.0.1",
-        help="address to bind (default 127.0.0.1; anything else exposes the page to the network)",
-    )
+    _add_listen(parser)
     parser.add_argument(
         "--timeout",
         type=_seconds,
@@ -151,23 +156,32 @@ def run_export(args: argparse.Namespace, prog: str = "smach-viewer") -> int:
     return EXIT_OK
 
 
-def run_view(args: argparse.Namespace, prog: str = "smach-viewer") -> int:
+def _serve(source: Source, args: argparse.Namespace, prog: str, doing: str) -> int:
+    """Serve the page over ``source`` at ``--host``/``--port`` until Ctrl-C."""
     from smach.introspection.server import serve
+
+    try:
+        viewer = serve(source, port=args.port, host=args.host, quiet=True)
+    except OSError as exc:
+        source.close()
+        return _fail(prog, f"cannot listen on {args.host}:{args.port}: {exc.strerror or exc}")
+    try:
+        print(f"{prog}: {doing} at {viewer.url} (Ctrl-C to stop)", file=sys.stderr)
+        sys.stderr.flush()
+        viewer.wait()
+    except KeyboardInterrupt:  # Ctrl-C as soon as the address is out, before wait()
+        viewer.close()
+    return EXIT_OK
+
+
+def run_view(args: argparse.Namespace, prog: str = "smach-viewer") -> int:
     from smach.introspection.source import JournalSource
 
     try:
         source = JournalSource(args.journal, follow=args.follow)
     except (OSError, ValueError) as exc:
         return _fail(prog, f"{args.journal}: {getattr(exc, 'strerror', None) or exc}")
-    try:
-        viewer = serve(source, port=args.port, host=args.host, quiet=True)
-    except OSError as exc:
-        source.close()
-        return _fail(prog, f"cannot listen on {args.host}:{args.port}: {exc.strerror or exc}")
-    print(f"{prog}: replaying {args.journal} at {viewer.url} (Ctrl-C to stop)", file=sys.stderr)
-    sys.stderr.flush()
-    viewer.wait()
-    return EXIT_OK
+    return _serve(source, args, prog, f"replaying {args.journal}")
 
 
 def run_ros(args: argparse.Namespace, prog: str = "smach-viewer") -> int:
@@ -176,21 +190,12 @@ def run_ros(args: argparse.Namespace, prog: str = "smach-viewer") -> int:
     except ImportError as exc:
         return _fail(prog, f"the ros command needs rclpy: {exc}")
     from smach.exceptions import SmachError
-    from smach.introspection.server import serve
 
     try:
         source = RosSource(args.server, timeout=args.timeout)
     except (TimeoutError, ValueError, SmachError) as exc:
         return _fail(prog, str(exc))
-    try:
-        viewer = serve(source, port=args.port, host=args.host, quiet=True)
-    except OSError as exc:
-        source.close()
-        return _fail(prog, f"cannot listen on {args.host}:{args.port}: {exc.strerror or exc}")
-    print(f"{prog}: following {source.base} at {viewer.url} (Ctrl-C to stop)", file=sys.stderr)
-    sys.stderr.flush()
-    viewer.wait()
-    return EXIT_OK
+    return _serve(source, args, prog, f"following {source.base}")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -115,40 +115,26 @@ class ViewerControls:
             source = given if isinstance(given, str) and given in ("viewer", "cli") else "viewer"
         body = {**body, "source": source}  # extra actions read it too
         try:
-            if action == "pause":
-                ctl.pause(source=source)
-            elif action == "resume":
-                ctl.resume(source=source)
-            elif action == "step":
-                ctl.step(source=source)
-            elif action == "preempt":
-                ctl.preempt(path or None, source=source)
-            elif action == "force_outcome":
-                outcome = body.get("outcome")
-                if not isinstance(outcome, str):
-                    raise ValueError("force_outcome needs 'outcome' (a string)")
-                ctl.force_outcome(outcome, path or None, source=source)
-            elif action in ("toggle_breakpoint", "add_breakpoint", "remove_breakpoint"):
-                pattern = body.get("pattern", path)
-                if not isinstance(pattern, str):
-                    raise ValueError(f"{action} needs 'pattern' (a state path or a glob)")
-                getattr(ctl, action)(pattern, source=source)
-            elif action == "clear_breakpoints":
-                ctl.clear_breakpoints(source=source)
+            if action in _CORE_ACTIONS:
+                _perform_core(ctl, action, body, path, source)
             elif isinstance(action, str) and action in self.actions:
-                try:
-                    result = self.actions[action](body)
-                except ValueError:
-                    raise
-                except Exception as exc:  # an answer, never a dropped connection
-                    raise ValueError(f"{action} failed: {type(exc).__name__}: {exc}") from exc
-                return {"ok": True, "result": str(result) if result is not None else None}
+                return {"ok": True, "result": self._perform_extra(action, body)}
             else:
                 allowed = ", ".join([*_CORE_ACTIONS, *sorted(self.actions)])
                 raise ValueError(f"unknown control action {action!r}; actions: {allowed}")
         except ControlError as exc:
             raise ValueError(str(exc)) from exc
         return {"ok": True, "status": ctl.status().to_json()}
+
+    def _perform_extra(self, action: str, body: Mapping[str, Any]) -> str | None:
+        """Call the extra ``action``; what it returns, as text."""
+        try:
+            result = self.actions[action](body)
+        except ValueError:
+            raise
+        except Exception as exc:  # an answer, never a dropped connection
+            raise ValueError(f"{action} failed: {type(exc).__name__}: {exc}") from exc
+        return str(result) if result is not None else None
 
     def handle_post(self, headers: Headers, read: Callable[[int], bytes]) -> dict[str, Any]:
         """Check the headers and the body of a POST, then :meth:`perform` it.
@@ -173,6 +159,26 @@ class ViewerControls:
         if not isinstance(body, dict):
             raise ValueError('the body must be a JSON object like {"action": "pause"}')
         return self.perform(body)
+
+
+def _perform_core(
+    ctl: Controller, action: str, body: Mapping[str, Any], path: str | None, source: str
+) -> None:
+    """Carry out one of the :data:`_CORE_ACTIONS` on ``ctl``."""
+    if action == "preempt":
+        ctl.preempt(path or None, source=source)
+    elif action == "force_outcome":
+        outcome = body.get("outcome")
+        if not isinstance(outcome, str):
+            raise ValueError("force_outcome needs 'outcome' (a string)")
+        ctl.force_outcome(outcome, path or None, source=source)
+    elif action in ("toggle_breakpoint", "add_breakpoint", "remove_breakpoint"):
+        pattern = body.get("pattern", path)
+        if not isinstance(pattern, str):
+            raise ValueError(f"{action} needs 'pattern' (a state path or a glob)")
+        getattr(ctl, action)(pattern, source=source)
+    else:  # pause, resume, step, clear_breakpoints: nothing to say but who asks
+        getattr(ctl, action)(source=source)
 
 
 def enable_controls(

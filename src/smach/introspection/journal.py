@@ -55,7 +55,7 @@ from pathlib import Path
 from typing import Any
 
 from smach.introspection.delta import diff, patch
-from smach.introspection.events import CaptureListener, Event
+from smach.introspection.events import CaptureListener
 from smach.introspection.journal_lines import ENCODER, capture_record, event_record
 from smach.introspection.journal_structures import MachineTracker
 from smach.introspection.journal_writer import JournalWriter
@@ -168,10 +168,6 @@ class Journal(CaptureListener):
     def pending(self) -> int:
         """How many items (events, pairs of events, records) are queued, not written yet."""
         return len(self._writer.pending)
-
-    def write_event(self, event: Event) -> None:
-        """Queue ``event`` (the listener does this for every event of the tree)."""
-        self._writer.pending.append(event.capture())
 
     def write_record(self, kind: str, **fields: Any) -> None:
         """Write a record that is not an event (e.g. a final summary); durable on return."""

@@ -29,8 +29,6 @@ from smach.introspection.summary import MAX_REPR, PLAIN, Summary, short_repr, su
 
 __all__ = ["ENCODER", "StructureItem", "capture_record", "event_record", "line_of", "lines_of"]
 
-_short_repr = short_repr
-
 
 def _plain(*texts: object) -> bool:
     """Whether these are strings that a record keeps unchanged (none is cut to MAX_REPR)."""
@@ -210,14 +208,18 @@ def line_of(item: Any) -> str:
         )
 
 
-# The lines of the three events of every transition are cached per state, split
-# around the time: only the time differs from one run of a state to the next. An
-# entry is used when every string matches; a cache grown past _CACHE_LIMIT entries is
-# emptied (a tree with that many states, or names that change all the time).
+# The lines of the events of states, transitions and containers are cached per path,
+# split around the time: only the time differs from one run of a state to the next. An entry is the strings
+# it was made of, then the text before and after the time (``entry[-2]``,
+# ``entry[-1]``); it is used when every string matches. A cache grown past
+# _CACHE_LIMIT entries is emptied (a tree with that many states, or names that change
+# all the time). The ``*_parts`` functions give the entry of a capture, made and cached
+# if needed, or None when its values are not plain short strings.
 _ENTERED: dict[str, tuple[str, str, str, str]] = {}
 _EXITED: dict[str, tuple[str, str, str | None, str, str]] = {}
 _TRANSITIONS: dict[str, dict[str, tuple[str, str, str, str, str]]] = {}
-_PAIRS: dict[str, tuple[str, str, str, str, str, str, str, str]] = {}
+_Pair = tuple[str, str, str, str, str, str, str, str]
+_PAIRS: dict[str, _Pair] = {}
 _CONTAINERS: dict[tuple[type[Event], str], tuple[tuple[Any, ...], str, str]] = {}
 _CACHE_LIMIT = 20_000
 _TIMED = "%s%.9f%s"
@@ -225,13 +227,22 @@ _PAIR = "%s%.9f%s%.9f%s"
 _STEP = "%s%.9f%s%.9f%s%s%.9f%s"
 
 
-def _entered_parts(path: str, thread: str, label: str) -> tuple[str, str, str, str] | None:
+def _cache_in(cache: dict[Any, Any]) -> dict[Any, Any]:
+    """``cache``, emptied first when it has grown past the limit."""
+    if len(cache) > _CACHE_LIMIT:
+        cache.clear()
+    return cache
+
+
+def _entered_parts(entered: Capture) -> tuple[str, str, str, str] | None:
+    _, path, _, thread, label = entered
+    entry = _ENTERED.get(path)
+    if entry is not None and entry[0] == thread and entry[1] == label:
+        return entry
     if not _plain(path, thread, label):
         return None
     q = encode_basestring
-    if len(_ENTERED) > _CACHE_LIMIT:
-        _ENTERED.clear()
-    entry = _ENTERED[path] = (
+    entry = _cache_in(_ENTERED)[path] = (
         thread,
         label,
         f'{{"kind": "state_entered", "path": {q(path)}, "time": ',
@@ -240,15 +251,15 @@ def _entered_parts(path: str, thread: str, label: str) -> tuple[str, str, str, s
     return entry
 
 
-def _exited_parts(
-    path: str, thread: str, label: str, outcome: str | None
-) -> tuple[str, str, str | None, str, str] | None:
+def _exited_parts(exited: Capture) -> tuple[str, str, str | None, str, str] | None:
+    _, path, _, thread, label, outcome = exited
+    entry = _EXITED.get(path)
+    if entry is not None and entry[0] == thread and entry[1] == label and entry[2] == outcome:
+        return entry
     if not _plain(path, thread, label, "" if outcome is None else outcome):
         return None
     q = encode_basestring
-    if len(_EXITED) > _CACHE_LIMIT:
-        _EXITED.clear()
-    entry = _EXITED[path] = (
+    entry = _cache_in(_EXITED)[path] = (
         thread,
         label,
         outcome,
@@ -259,18 +270,16 @@ def _exited_parts(
     return entry
 
 
-def _transition_parts(
-    path: str, thread: str, source: str, outcome: str, target: str
-) -> tuple[str, str, str, str, str] | None:
+def _transition_parts(moved: Capture) -> tuple[str, str, str, str, str] | None:
+    _, path, _, thread, source, outcome, target = moved
+    of_container = _TRANSITIONS.get(path)
+    entry = None if of_container is None else of_container.get(source)
+    if entry is not None and entry[0] == thread and entry[1] == outcome and entry[2] == target:
+        return entry
     if not _plain(path, thread, source, outcome, target):
         return None
     q = encode_basestring
-    if len(_TRANSITIONS) > _CACHE_LIMIT:
-        _TRANSITIONS.clear()
-    of_container = _TRANSITIONS.setdefault(path, {})
-    if len(of_container) > _CACHE_LIMIT:
-        of_container.clear()
-    entry = of_container[source] = (
+    entry = _cache_in(_cache_in(_TRANSITIONS).setdefault(path, {}))[source] = (
         thread,
         outcome,
         target,
@@ -283,37 +292,102 @@ def _transition_parts(
 
 def _container_parts(capture: Capture) -> tuple[tuple[Any, ...], str, str]:
     """The line of a container_started / container_terminated split around its time."""
-    line = _capture_line((capture[0], capture[1], 0.0, *capture[3:]))
+    key = (capture[0], capture[1])
+    rest = capture[3:]
+    entry = _CONTAINERS.get(key)
+    if entry is not None and entry[0] == rest:
+        return entry
+    line = _capture_line((capture[0], capture[1], 0.0, *rest))
     head, found, tail = line.partition('"time": 0.000000000')
     if not found:
         raise ValueError("no time in the line")  # not expected: the general path then
-    if len(_CONTAINERS) > _CACHE_LIMIT:
-        _CONTAINERS.clear()
-    entry = _CONTAINERS[capture[0], capture[1]] = (capture[3:], head + '"time": ', tail)
+    entry = _cache_in(_CONTAINERS)[key] = (rest, head + '"time": ', tail)
     return entry
 
 
-def _pair_parts(
-    path: str, thread: str, label: str, outcome: str, container: str, target: str
-) -> tuple[str, str, str, str, str, str, str, str] | None:
-    """The parts of a state_exited line and of the transition line that follows it."""
-    exited = _exited_parts(path, thread, label, outcome)
-    moved = _transition_parts(container, thread, label, outcome, target)
-    if exited is None or moved is None:
+_PARTS: dict[type[Event], Callable[[Capture], tuple[Any, ...] | None]] = {
+    StateEntered: _entered_parts,
+    StateExited: _exited_parts,
+    Transition: _transition_parts,
+    ContainerStarted: _container_parts,
+    ContainerTerminated: _container_parts,
+}
+
+
+def _pair_parts(exited: Capture, moved: Capture) -> _Pair | None:
+    """The parts of a state_exited line and of the transition line that follows it:
+    the strings they were made of, then the text before, between and after the times
+    (made and cached; :func:`_step_text` looks them up)."""
+    _, path, _, thread, label, outcome = exited
+    container, target = moved[1], moved[6]
+    out = _exited_parts(exited)
+    into = _transition_parts(moved)
+    if out is None or into is None:
         return None
-    if len(_PAIRS) > _CACHE_LIMIT:
-        _PAIRS.clear()
-    entry = _PAIRS[path] = (
+    entry = _cache_in(_PAIRS)[path] = (
         thread,
         label,
         outcome,
         container,
         target,
-        exited[3],
-        exited[4] + moved[3],
-        moved[4],
+        out[3],
+        out[4] + into[3],
+        into[4],
     )
     return entry
+
+
+def _step_text(
+    step: tuple[Capture, ...], known: set[str] | None
+) -> tuple[str, tuple[Any, ...]] | None:
+    """The template and arguments of the lines of a state machine's step, or None.
+
+    A step is state_exited + transition (+ state_entered of the next state), all from
+    one thread, the first two at one time, captured together; anything else is None.
+    """
+    exited, moved = step[0], step[1]
+    _, path, t, thread, label, outcome = exited
+    if not (
+        exited[0] is StateExited
+        and moved[0] is Transition
+        and type(t) is float
+        and t - t == 0.0
+        and moved[2] is t
+        and moved[3] is thread
+        and moved[4] == label
+        and moved[5] == outcome
+        and (known is None or (path in known and moved[1] in known))
+    ):
+        return None
+    pair = _PAIRS.get(path)
+    if (
+        pair is None
+        or pair[0] != thread
+        or pair[1] != label
+        or pair[2] != outcome
+        or pair[3] != moved[1]
+        or pair[4] != moved[6]
+    ):
+        pair = _pair_parts(exited, moved)
+        if pair is None:
+            return None
+    if len(step) == 2:
+        return _PAIR, (pair[5], t, pair[6], t, pair[7])
+    _, _, entered = step  # three: the next state's state_entered
+    _, next_path, t_next, next_thread, next_label = entered
+    if not (
+        entered[0] is StateEntered
+        and next_thread is thread
+        and next_label == moved[6]
+        and type(t_next) is float
+        and t_next - t_next == 0.0
+        and (known is None or next_path in known)
+    ):
+        return None
+    into = _entered_parts(entered)
+    if into is None:
+        return None
+    return _STEP, (pair[5], t, pair[6], t, pair[7], into[2], t_next, into[3])
 
 
 def lines_of(
@@ -330,7 +404,7 @@ def lines_of(
     ``known``: the items are taken in order, so an event is checked against the
     structure in force when it happened).
 
-    The three events of every transition are written from cached parts (see
+    The events of steps, states and containers are written from cached parts (see
     _ENTERED), their times formatted in one C call for the whole batch: several times
     cheaper than building and encoding a record. Such a line is the one :func:`line_of`
     writes. Any other item, or any surprise (a value that is not a short string, a
@@ -340,93 +414,28 @@ def lines_of(
     args: list[Any] = []
     timed = template.append
     arg = args.append
-    entered_of = _ENTERED.get
-    exited_of = _EXITED.get
-    pairs_of = _PAIRS.get
-    transitions_of = _TRANSITIONS.get
-    containers_of = _CONTAINERS.get
     others = 0
     for item in items:
-        if type(item) is StructureItem:
+        kind = type(item)
+        if kind is not tuple:  # a structure, a record or a line: not an event
             others += 1
             timed("%s")
-            arg(structure(item))
-            continue
-        if type(item) is not tuple:
-            others += 1  # a record or a line, not an event
-            timed("%s")
-            arg(line_of(item))
+            arg(structure(item) if kind is StructureItem else line_of(item))
             continue
         if type(item[0]) is tuple:  # captures that came together (capture_many)
             try:
-                # A state machine's step: state_exited + transition (+ state_entered of
-                # the next state), all from one thread, the first two at one time.
-                exited = item[0]
-                moved = item[1]
-                _, path, t, thread, label, outcome = exited
-                if (
-                    exited[0] is StateExited
-                    and moved[0] is Transition
-                    and type(t) is float
-                    and t - t == 0.0
-                    and moved[2] is t
-                    and moved[3] is thread
-                    and moved[4] == label
-                    and moved[5] == outcome
-                    and (known is None or (path in known and moved[1] in known))
-                ):
-                    container, target = moved[1], moved[6]
-                    pair = pairs_of(path)
-                    if (
-                        pair is None
-                        or pair[0] != thread
-                        or pair[1] != label
-                        or pair[2] != outcome
-                        or pair[3] != container
-                        or pair[4] != target
-                    ):
-                        pair = _pair_parts(path, thread, label, outcome, container, target)
-                    if pair is not None:
-                        if len(item) == 2:
-                            timed(_PAIR)
-                            arg(pair[5])
-                            arg(t)
-                            arg(pair[6])
-                            arg(t)
-                            arg(pair[7])
-                            others -= 1  # two events in one item
-                            continue
-                        _, _, entered = item  # three: the next state's state_entered
-                        _, next_path, t_next, next_thread, next_label = entered
-                        if (
-                            entered[0] is StateEntered
-                            and next_thread is thread
-                            and next_label == target
-                            and type(t_next) is float
-                            and t_next - t_next == 0.0
-                            and (known is None or next_path in known)
-                        ):
-                            e = entered_of(next_path)
-                            if e is None or e[0] != thread or e[1] != next_label:
-                                e = _entered_parts(next_path, thread, next_label)
-                            if e is not None:
-                                timed(_STEP)
-                                arg(pair[5])
-                                arg(t)
-                                arg(pair[6])
-                                arg(t)
-                                arg(pair[7])
-                                arg(e[2])
-                                arg(t_next)
-                                arg(e[3])
-                                others -= 2  # three events in one item
-                                continue
-            except Exception:  # not the usual step: one by one below
-                pass
-            text, events = lines_of(list(item), known, new_path, structure)
-            others -= events - 1
-            timed("%s")
-            arg(text)
+                step = _step_text(item, known)
+            except Exception:  # not the usual step
+                step = None
+            if step is not None:
+                timed(step[0])
+                args.extend(step[1])
+                others -= len(item) - 1  # several events in one item
+            else:  # one by one
+                text, events = lines_of(list(item), known, new_path, structure)
+                others -= events - 1
+                timed("%s")
+                arg(text)
             continue
         if known is not None and item[1] not in known:
             first = new_path(item[1])
@@ -434,55 +443,17 @@ def lines_of(
                 timed("%s")
                 arg(first)
         try:
-            cls = item[0]
             t = item[2]
-            if type(t) is float and t - t == 0.0:
-                if cls is ContainerStarted or cls is ContainerTerminated:
-                    rest = item[3:]
-                    c = containers_of((cls, item[1]))
-                    if c is None or c[0] != rest:
-                        c = _container_parts(item)
-                    timed(_TIMED)
-                    arg(c[1])
-                    arg(t)
-                    arg(c[2])
-                    continue
-                if cls is StateEntered:
-                    _, path, _, thread, label = item
-                    e = entered_of(path)
-                    if e is None or e[0] != thread or e[1] != label:
-                        e = _entered_parts(path, thread, label)
-                    if e is not None:
-                        timed(_TIMED)
-                        arg(e[2])
-                        arg(t)
-                        arg(e[3])
-                        continue
-                elif cls is StateExited:
-                    _, path, _, thread, label, outcome = item
-                    x = exited_of(path)
-                    if x is None or x[0] != thread or x[1] != label or x[2] != outcome:
-                        x = _exited_parts(path, thread, label, outcome)
-                    if x is not None:
-                        timed(_TIMED)
-                        arg(x[3])
-                        arg(t)
-                        arg(x[4])
-                        continue
-                elif cls is Transition:
-                    _, path, _, thread, source, outcome, target = item
-                    of_container = transitions_of(path)
-                    m = None if of_container is None else of_container.get(source)
-                    if m is None or m[0] != thread or m[1] != outcome or m[2] != target:
-                        m = _transition_parts(path, thread, source, outcome, target)
-                    if m is not None:
-                        timed(_TIMED)
-                        arg(m[3])
-                        arg(t)
-                        arg(m[4])
-                        continue
-        except Exception:  # not plain strings: the general path below
-            pass
-        timed("%s")
-        arg(line_of(item))
+            split = _PARTS.get(item[0]) if type(t) is float and t - t == 0.0 else None
+            parts = None if split is None else split(item)
+        except Exception:  # not plain strings
+            parts = None
+        if parts is None:  # the general path
+            timed("%s")
+            arg(line_of(item))
+        else:
+            timed(_TIMED)
+            arg(parts[-2])
+            arg(t)
+            arg(parts[-1])
     return "".join(template) % tuple(args), len(items) - others

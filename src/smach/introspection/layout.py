@@ -10,11 +10,8 @@ longest path from the initial state (back edges ignored), a rank with many state
 bottom; an edge leaving a nested container starts at the outcome it returned.
 Collapsed containers are drawn as one box.
 
-Text is measured with the advance widths of Arial / Liberation Sans (the page's
-font), so boxes fit their labels without a browser.
-
-(Over 600 lines: one layout algorithm whose phases (rank, rows, columns, edges,
-text widths) are read top to bottom.)
+Boxes are sized to their labels by :func:`~smach.introspection.shapes.text_width`;
+the shapes a layout is made of are in :mod:`~smach.introspection.shapes`.
 """
 
 from __future__ import annotations
@@ -24,12 +21,20 @@ import math
 from collections.abc import Collection, Iterator
 from dataclasses import dataclass, field
 
-from smach.introspection.structure import StateNode
+from smach.introspection.shapes import (
+    FONT_SIZE,
+    LABEL_H,
+    SMALL_FONT,
+    EdgeShape,
+    Layout,
+    Shape,
+    label_box,
+    text_width,
+)
+from smach.introspection.structure import Edge, StateNode
 
 __all__ = ["EdgeShape", "Layout", "Shape", "label_box", "layout", "off_path", "text_width"]
 
-FONT_SIZE = 12.0
-SMALL_FONT = 10.0
 NODE_H = 40.0
 NODE_MIN_W = 76.0
 NODE_PAD = 14.0
@@ -42,67 +47,6 @@ OUTCOME_GAP = 10.0
 MAX_PER_ROW = 6
 MIN_ROWS_PER_COLUMN = 8
 TALL = 700.0  # a stack of rows taller than this (and than wide) wraps into columns
-
-# Advance widths of Arial (= Liberation Sans) in 1/1000 em, for ASCII 32..126.
-_WIDTHS = [
-    278, 278, 355, 556, 556, 889, 667, 191, 333, 333, 389, 584, 278, 333, 278, 278,
-    556, 556, 556, 556, 556, 556, 556, 556, 556, 556, 278, 278, 584, 584, 584, 556,
-    1015, 667, 667, 722, 722, 667, 611, 778, 722, 278, 500, 667, 556, 833, 722, 778,
-    667, 778, 722, 667, 611, 722, 667, 944, 667, 667, 611, 278, 278, 278, 469, 556,
-    333, 556, 556, 500, 556, 556, 278, 556, 556, 222, 222, 500, 222, 833, 556, 556,
-    556, 556, 333, 500, 278, 556, 500, 722, 500, 500, 500, 334, 260, 334, 584,
-]  # fmt: skip
-
-
-def text_width(text: str, size: float = FONT_SIZE, bold: bool = False) -> float:
-    """Width of ``text`` in pixels in Arial at ``size`` (a little generous)."""
-    units = 0
-    for ch in text:
-        code = ord(ch)
-        units += _WIDTHS[code - 32] if 32 <= code <= 126 else 600
-    return units * size / 1000.0 * (1.08 if bold else 1.02)
-
-
-@dataclass
-class Shape:
-    """A box: a state, a container (cluster), a collapsed container, or an outcome pill."""
-
-    kind: str
-    """``state``, ``container``, ``collapsed`` or ``outcome``."""
-    path: str
-    label: str
-    type: str
-    x: float
-    y: float
-    w: float
-    h: float
-    depth: int = 0
-    count: int = 0
-    """States inside a collapsed container."""
-    container: str = ""
-    """For outcome pills: the container whose outcome this is."""
-
-
-@dataclass
-class EdgeShape:
-    """A transition drawn from ``source`` to ``target`` inside ``container``."""
-
-    container: str
-    source: str
-    outcome: str
-    target: str
-    terminal: bool
-    d: str
-    label_x: float
-    label_y: float
-
-
-@dataclass
-class Layout:
-    width: float
-    height: float
-    shapes: list[Shape] = field(default_factory=list)
-    edges: list[EdgeShape] = field(default_factory=list)
 
 
 @dataclass
@@ -184,9 +128,45 @@ def _ranks(node: StateNode) -> dict[str, int]:
 
 
 def _container(node: StateNode, collapsed: Collection[str], depth: int) -> _Block:
-    blocks: dict[str, _Block] = {}
-    for child in node.children:
-        blocks[child.label] = _block(child, collapsed, depth + 1)
+    """The block of an expanded container: its children's blocks in rows and columns,
+    its outcome pills in a row at the bottom, and the edges of its transitions."""
+    blocks = {child.label: _block(child, collapsed, depth + 1) for child in node.children}
+    top = HEADER + PAD
+    placed, content_w, content_h = _place(_columns(_rows(node), blocks), blocks, top)
+
+    pill_ws = [max(46.0, text_width(o, SMALL_FONT) + 18) for o in node.outcomes]
+    pills_w = sum(pill_ws) + OUTCOME_GAP * max(0, len(pill_ws) - 1)
+    title_w = text_width(f"{node.label}  {node.type}", FONT_SIZE, bold=True) + 40
+    inner_w = max(content_w, pills_w, title_w, NODE_MIN_W)
+    w = inner_w + 2 * PAD
+    pill_y = top + content_h + (GAP_Y if node.children else 0)
+    h = pill_y + OUTCOME_H + PAD
+
+    # Centre the content if the container is wider than it (long titles, many pills).
+    shift = (inner_w - content_w) / 2
+    placed = {label: (bx + shift, by, block) for label, (bx, by, block) in placed.items()}
+
+    box = Shape("container", node.path, node.label, node.type, 0.0, 0.0, w, h, depth)
+    shapes = [box, *_pills(node, pill_ws, PAD + (inner_w - pills_w) / 2, pill_y, depth)]
+    pills = {pill.label: pill for pill in shapes[1:]}
+    edges: list[EdgeShape] = []
+    for bx, by, block in placed.values():
+        shapes.extend(_moved(s, bx, by) for s in block.shapes)
+        edges.extend(_moved_edge(e, bx, by) for e in block.edges)
+    lanes: dict[str, float] = {}
+    own = _edges(node, placed, pills, lanes)
+    edges.extend(own)
+    _separate_labels(edges, len(edges) - len(own))
+    # Back edges and lanes may reach out on the right: make room.
+    reach = [e.label_x + 30 for e in own] + [lane + PAD for lane in lanes.values()]
+    w += max(0.0, max(reach, default=w) - w)
+    box.w = w
+    return _Block(w, h, shapes, edges, pills, box)
+
+
+def _rows(node: StateNode) -> list[list[str]]:
+    """The children's labels in rows: ranks top to bottom, each ordered by its
+    predecessors' positions and cut into rows of :data:`MAX_PER_ROW`."""
     rank = _ranks(node)
     by_rank: dict[int, list[str]] = {}
     for child in node.children:
@@ -195,7 +175,6 @@ def _container(node: StateNode, collapsed: Collection[str], depth: int) -> _Bloc
     for edge in node.edges:
         if not edge.terminal and edge.target in preds and edge.source in preds:
             preds[edge.target].append(edge.source)
-    # Rows: ranks top to bottom, each ordered by its predecessors' positions.
     rows: list[list[str]] = []
     position: dict[str, float] = {}
     for r in sorted(by_rank):
@@ -213,12 +192,19 @@ def _container(node: StateNode, collapsed: Collection[str], depth: int) -> _Bloc
             for i, label in enumerate(row):
                 position[label] = i - (len(row) - 1) / 2
             rows.append(row)
-    columns = _columns(rows, blocks)
+    return rows
 
-    top = HEADER + PAD
-    shapes: list[Shape] = []
-    edges: list[EdgeShape] = []
-    placed: dict[str, tuple[float, float, _Block]] = {}
+
+_Placed = dict[str, tuple[float, float, _Block]]
+"""Where each child's block goes: label -> (x, y, block), relative to the container."""
+
+
+def _place(
+    columns: list[list[list[str]]], blocks: dict[str, _Block], top: float
+) -> tuple[_Placed, float, float]:
+    """The place of each block, columns left to right and rows centred in their column,
+    and the width and height of them all."""
+    placed: _Placed = {}
     x = PAD
     content_h = 0.0
     for column in columns:
@@ -237,150 +223,131 @@ def _container(node: StateNode, collapsed: Collection[str], depth: int) -> _Bloc
             y += row_h + GAP_Y
         content_h = max(content_h, y - GAP_Y - top)
         x += col_w + GAP_X * 1.6
-    content_w = max(0.0, x - GAP_X * 1.6 - PAD)
+    return placed, max(0.0, x - GAP_X * 1.6 - PAD), content_h
 
-    pill_ws = [max(46.0, text_width(o, SMALL_FONT) + 18) for o in node.outcomes]
-    pills_w = sum(pill_ws) + OUTCOME_GAP * max(0, len(pill_ws) - 1)
-    title_w = text_width(f"{node.label}  {node.type}", FONT_SIZE, bold=True) + 40
-    inner_w = max(content_w, pills_w, title_w, NODE_MIN_W)
-    w = inner_w + 2 * PAD
-    pill_y = top + content_h + (GAP_Y if node.children else 0)
-    h = pill_y + OUTCOME_H + PAD
 
-    # Centre the content if the container is wider than it (long titles, many pills).
-    shift = (inner_w - content_w) / 2
-    for label, (bx, by, block) in list(placed.items()):
-        placed[label] = (bx + shift, by, block)
-
-    box = Shape("container", node.path, node.label, node.type, 0.0, 0.0, w, h, depth)
-    shapes.append(box)
-    pills: dict[str, Shape] = {}
-    px = PAD + (inner_w - pills_w) / 2
-    for outcome, pw in zip(node.outcomes, pill_ws, strict=True):
-        pill = Shape(
-            "outcome",
-            f"{node.path}:{outcome}",
-            outcome,
-            "outcome",
-            px,
-            pill_y,
-            pw,
-            OUTCOME_H,
-            depth,
-            container=node.path,
+def _pills(node: StateNode, widths: list[float], x: float, y: float, depth: int) -> list[Shape]:
+    """The outcome pills of ``node`` in a row from ``(x, y)``."""
+    pills = []
+    for outcome, pw in zip(node.outcomes, widths, strict=True):
+        pills.append(
+            Shape(
+                "outcome",
+                f"{node.path}:{outcome}",
+                outcome,
+                "outcome",
+                x,
+                y,
+                pw,
+                OUTCOME_H,
+                depth,
+                container=node.path,
+            )
         )
-        pills[outcome] = pill
-        shapes.append(pill)
-        px += pw + OUTCOME_GAP
-    for _label, (bx, by, block) in placed.items():
-        shapes.extend(_moved(s, bx, by) for s in block.shapes)
-        edges.extend(_moved_edge(e, bx, by) for e in block.edges)
+        x += pw + OUTCOME_GAP
+    return pills
 
-    # Edges of this container.
+
+_Anchor = tuple[float, float, float, float]
+"""Where an edge meets a box: ``(x, y)`` on its bottom (a source) or top (a target),
+and ``(right, mid)`` on its right-hand side, for loops and back edges."""
+
+
+def _edges(
+    node: StateNode, placed: _Placed, pills: dict[str, Shape], lanes: dict[str, float]
+) -> list[EdgeShape]:
+    """The edges of the transitions of ``node`` between its placed children and pills."""
     out_count: dict[str, int] = {}
     for edge in node.edges:
         if edge.source in placed:
             out_count[edge.source] = out_count.get(edge.source, 0) + 1
     out_seen: dict[str, int] = {}
-    lanes: dict[str, float] = {}
     boxes = _Boxes(placed)
+    edges: list[EdgeShape] = []
     for edge in node.edges:
         if edge.source not in placed:
             continue
-        sx0, sy0, sblock = placed[edge.source]
         k = out_seen.get(edge.source, 0)
         out_seen[edge.source] = k + 1
-        pill_of_source = sblock.pills.get(edge.outcome)
-        if pill_of_source is not None:
-            sx = sx0 + pill_of_source.x + pill_of_source.w / 2
-            sy = sy0 + pill_of_source.y + pill_of_source.h
-            s_right = sx0 + sblock.w
-            s_mid = sy0 + pill_of_source.y + pill_of_source.h / 2
-        else:
-            m = out_count[edge.source]
-            sx = sx0 + sblock.w * (k + 1) / (m + 1)
-            sy = sy0 + sblock.h
-            s_right = sx0 + sblock.w
-            s_mid = sy0 + sblock.h / 2
-        if edge.terminal:
-            target_pill = pills.get(edge.target)
-            if target_pill is None:
-                continue
-            tx, ty = target_pill.x + target_pill.w / 2, target_pill.y
-            t_right, t_mid = target_pill.x + target_pill.w, target_pill.y + target_pill.h / 2
-        elif edge.target in placed:
-            tx0, ty0, tblock = placed[edge.target]
-            tx, ty = tx0 + tblock.w / 2, ty0
-            t_right, t_mid = tx0 + tblock.w, ty0 + min(tblock.h / 2, NODE_H / 2)
-        else:
+        source = placed[edge.source]
+        start = _leaving(source, edge.outcome, k, out_count[edge.source])
+        end = _arriving(edge, placed, pills)
+        if end is None:
             continue
-        if edge.source == edge.target and not edge.terminal:
-            d = (
-                f"M{s_right:.1f},{s_mid - 8:.1f} C{s_right + 40:.1f},{s_mid - 30:.1f} "
-                f"{s_right + 40:.1f},{s_mid + 30:.1f} {s_right:.1f},{s_mid + 8:.1f}"
-            )
-            lx, ly = s_right + 34, s_mid
-        elif ty > sy + 4 and (lane := _lane(boxes, edge, sx, sy, tx, ty, lanes)) is not None:
-            # A long edge would cross the states between: run it down a lane beside them.
-            d = (
-                f"M{sx:.1f},{sy:.1f} C{sx:.1f},{sy + 16:.1f} {lane:.1f},{sy + 6:.1f} "
-                f"{lane:.1f},{sy + 28:.1f} L{lane:.1f},{ty - 28:.1f} C{lane:.1f},{ty - 6:.1f} "
-                f"{tx:.1f},{ty - 16:.1f} {tx:.1f},{ty:.1f}"
-            )
-            lx, ly = lane, sy + 40
-        elif ty > sy + 4:
-            dy = max(24.0, (ty - sy) / 2)
-            d = (
-                f"M{sx:.1f},{sy:.1f} C{sx:.1f},{sy + dy:.1f} {tx:.1f},{ty - dy:.1f} "
-                f"{tx:.1f},{ty:.1f}"
-            )
-            lx, ly = _bezier_mid((sx, sy), (sx, sy + dy), (tx, ty - dy), (tx, ty))
-        elif abs(tx - sx) > max(sblock.w, 60) and ty < sy:
-            # Into the next column of a wrapped chain: leave downwards, arrive from above.
-            d = (
-                f"M{sx:.1f},{sy:.1f} C{sx:.1f},{sy + 60:.1f} {tx:.1f},{ty - 60:.1f} "
-                f"{tx:.1f},{ty:.1f}"
-            )
-            lx, ly = _bezier_mid((sx, sy), (sx, sy + 60), (tx, ty - 60), (tx, ty))
-        else:
-            # Back edge: around the right-hand side.
-            bulge = 36 + abs(s_mid - t_mid) * 0.15
-            right = max(s_right, t_right)
-            d = (
-                f"M{s_right:.1f},{s_mid:.1f} C{right + bulge:.1f},{s_mid:.1f} "
-                f"{right + bulge:.1f},{t_mid:.1f} {t_right:.1f},{t_mid:.1f}"
-            )
-            lx, ly = right + bulge * 0.75, (s_mid + t_mid) / 2
+        d, lx, ly = _curve(edge, start, end, source[2].w, boxes, lanes)
         edges.append(
             EdgeShape(node.path, edge.source, edge.outcome, edge.target, edge.terminal, d, lx, ly)
         )
-    _separate_labels(edges, len(edges) - sum(1 for e in edges if e.container == node.path))
-    # Back edges may bulge out on the right: make room.
-    extra = 0.0
-    for e in edges:
-        if e.container == node.path and e.label_x + 30 > w:
-            extra = max(extra, e.label_x + 30 - w)
-    for lane in lanes.values():
-        extra = max(extra, lane + PAD - w)
-    if extra:
-        w += extra
-        box.w = w
-    return _Block(w, h, shapes, edges, pills, box)
+    return edges
 
 
-LABEL_H = 13.0
-"""Height of an edge label's box (10 px text and its white halo)."""
+def _leaving(source: tuple[float, float, _Block], outcome: str, k: int, m: int) -> _Anchor:
+    """Where the ``k``-th of ``m`` edges leaving ``source`` starts: the pill of its outcome
+    (a container), else spread along its bottom."""
+    sx0, sy0, sblock = source
+    pill = sblock.pills.get(outcome)
+    if pill is not None:
+        return (
+            sx0 + pill.x + pill.w / 2,
+            sy0 + pill.y + pill.h,
+            sx0 + sblock.w,
+            sy0 + pill.y + pill.h / 2,
+        )
+    return sx0 + sblock.w * (k + 1) / (m + 1), sy0 + sblock.h, sx0 + sblock.w, sy0 + sblock.h / 2
 
 
-def label_box(edge: EdgeShape) -> tuple[float, float, float, float]:
-    """(left, top, right, bottom) of the label of ``edge`` (drawn centred on its point)."""
-    half = (text_width(edge.outcome, SMALL_FONT) + 6) / 2
-    return (
-        edge.label_x - half,
-        edge.label_y - LABEL_H / 2,
-        edge.label_x + half,
-        edge.label_y + LABEL_H / 2,
+def _arriving(edge: Edge, placed: _Placed, pills: dict[str, Shape]) -> _Anchor | None:
+    """Where ``edge`` ends: an outcome pill or a sibling's top; None: neither is drawn."""
+    if edge.terminal:
+        pill = pills.get(edge.target)
+        if pill is None:
+            return None
+        return pill.x + pill.w / 2, pill.y, pill.x + pill.w, pill.y + pill.h / 2
+    if edge.target in placed:
+        tx0, ty0, tblock = placed[edge.target]
+        return tx0 + tblock.w / 2, ty0, tx0 + tblock.w, ty0 + min(tblock.h / 2, NODE_H / 2)
+    return None
+
+
+def _curve(
+    edge: Edge,
+    start: _Anchor,
+    end: _Anchor,
+    source_w: float,
+    boxes: _Boxes,
+    lanes: dict[str, float],
+) -> tuple[str, float, float]:
+    """The SVG path of ``edge`` from ``start`` to ``end`` and where its label goes."""
+    sx, sy, s_right, s_mid = start
+    tx, ty, t_right, t_mid = end
+    if edge.source == edge.target and not edge.terminal:
+        d = (
+            f"M{s_right:.1f},{s_mid - 8:.1f} C{s_right + 40:.1f},{s_mid - 30:.1f} "
+            f"{s_right + 40:.1f},{s_mid + 30:.1f} {s_right:.1f},{s_mid + 8:.1f}"
+        )
+        return d, s_right + 34, s_mid
+    if ty > sy + 4 and (lane := _lane(boxes, edge, sx, sy, tx, ty, lanes)) is not None:
+        # A long edge would cross the states between: run it down a lane beside them.
+        d = (
+            f"M{sx:.1f},{sy:.1f} C{sx:.1f},{sy + 16:.1f} {lane:.1f},{sy + 6:.1f} "
+            f"{lane:.1f},{sy + 28:.1f} L{lane:.1f},{ty - 28:.1f} C{lane:.1f},{ty - 6:.1f} "
+            f"{tx:.1f},{ty - 16:.1f} {tx:.1f},{ty:.1f}"
+        )
+        return d, lane, sy + 40
+    if ty > sy + 4 or (abs(tx - sx) > max(source_w, 60) and ty < sy):
+        # Downwards; or into the next column of a wrapped chain: leave downwards, arrive
+        # from above.
+        dy = max(24.0, (ty - sy) / 2) if ty > sy + 4 else 60
+        d = f"M{sx:.1f},{sy:.1f} C{sx:.1f},{sy + dy:.1f} {tx:.1f},{ty - dy:.1f} {tx:.1f},{ty:.1f}"
+        return d, *_bezier_mid((sx, sy), (sx, sy + dy), (tx, ty - dy), (tx, ty))
+    # Back edge: around the right-hand side.
+    bulge = 36 + abs(s_mid - t_mid) * 0.15
+    right = max(s_right, t_right)
+    d = (
+        f"M{s_right:.1f},{s_mid:.1f} C{right + bulge:.1f},{s_mid:.1f} "
+        f"{right + bulge:.1f},{t_mid:.1f} {t_right:.1f},{t_mid:.1f}"
     )
+    return d, right + bulge * 0.75, (s_mid + t_mid) / 2
 
 
 def _overlap(a: tuple[float, float, float, float], b: tuple[float, float, float, float]) -> bool:
@@ -439,7 +406,7 @@ _CELL = 64.0
 class _Boxes:
     """The boxes of a container sorted by their top, to find those an edge would cross."""
 
-    def __init__(self, placed: dict[str, tuple[float, float, _Block]]) -> None:
+    def __init__(self, placed: _Placed) -> None:
         self.items = sorted((y, x, b.w, b.h, label) for label, (x, y, b) in placed.items())
         self.tops = [item[0] for item in self.items]
         self.right = max((x + w for _, x, w, _, _ in self.items), default=0.0)

@@ -21,7 +21,6 @@ is kept as the view's :attr:`ViewModel.scene` until the next one.
 from __future__ import annotations
 
 import bisect
-import re
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -35,12 +34,6 @@ MAX_ERRORS = 50
 MAX_DECISIONS = 200
 MAX_PLANS = 50
 MAX_STEPS = 500
-
-_STEP_LABEL = re.compile(r"^(\d+)_")
-
-
-def _descendant(path: str, of: str) -> bool:
-    return path == of or path.startswith(of + "/")
 
 
 @dataclass
@@ -504,19 +497,6 @@ class History:
         for record in self.records[start - self.first : index - self.first]:
             model.apply(record)
         return model
-
-    def index_at_time(self, seconds: float) -> int:
-        """How many records happened within ``seconds`` of the first timed record."""
-        t0 = self.model.t0
-        if t0 is None:
-            return self.total
-        count = self.first
-        for n, record in enumerate(self.records):
-            t = record.get("time")
-            if isinstance(t, int | float) and t - t0 > seconds:
-                break
-            count = self.first + n + 1
-        return count
 
     def slice(self, start: int, end: int) -> list[dict[str, Any]]:
         start = max(start, self.first)

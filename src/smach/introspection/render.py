@@ -11,7 +11,7 @@ from __future__ import annotations
 import re
 from collections.abc import Collection, Mapping
 
-from smach.introspection.structure import StateNode
+from smach.introspection.structure import Edge, StateNode
 
 __all__ = ["to_dot", "to_mermaid", "to_svg"]
 
@@ -39,7 +39,6 @@ def _entry(node: StateNode) -> str:
 
 def to_dot(root: StateNode, active: Collection[str] = ()) -> str:
     """Graphviz DOT text for ``root``; paths in ``active`` are filled yellow."""
-    active_set = set(active)
     lines = [
         "digraph smach {",
         "  compound=true; rankdir=TB; fontname=Helvetica;",
@@ -47,67 +46,73 @@ def to_dot(root: StateNode, active: Collection[str] = ()) -> str:
         "fillcolor=white];",
         "  edge [fontname=Helvetica, fontsize=9];",
     ]
-
-    def emit(node: StateNode, depth: int) -> None:
-        pad = "  " * depth
-        if not node.is_container:
-            fill = _ACTIVE if node.path in active_set else "white"
-            lines.append(f"{pad}{_q(node.path)} [label={_q(node.label)}, fillcolor={_q(fill)}];")
-            return
-        fill = _CONTAINER_FILL.get(node.type, "#f5f5f5")
-        lines.append(f"{pad}subgraph {_q('cluster_' + node.path)} {{")
-        if node.path in active_set:
-            # An active container: its frame in the active colour (its inside keeps the
-            # container's fill, so the active state inside it still stands out).
-            mark = f'style="rounded,filled,bold"; color={_q(_ACTIVE_STROKE)}; penwidth=2.5;'
-        else:
-            mark = 'style="rounded,filled";'
-        lines.append(
-            f"{pad}  label={_q(f'{node.label} ({node.type})')}; {mark} fillcolor={_q(fill)};"
-        )
-        if not node.children:
-            lines.append(f'{pad}  {_q(node.path + ":empty")} [label="(empty)", shape=plaintext];')
-        for child in node.children:
-            emit(child, depth + 1)
-        for outcome in node.outcomes:
-            lines.append(
-                f"{pad}  {_q(_outcome_id(node, outcome))} [label={_q(outcome)}, shape=ellipse, "
-                'style=filled, fillcolor="#e0e0e0", fontsize=9];'
-            )
-        lines.append(f"{pad}}}")
-
-    emit(root, 1)
-
-    def link(node: StateNode) -> None:
-        if not node.is_container:
-            return
-        by_label = {c.label: c for c in node.children}
-        for edge in node.edges:
-            source = by_label.get(edge.source)
-            if source is None:
-                continue
-            attrs = [f"label={_q(edge.outcome)}"]
-            if source.is_container:
-                tail = _outcome_id(source, edge.outcome)
-                if edge.outcome not in source.outcomes:
-                    tail = _entry(source)
-                    attrs.append(f"ltail={_q('cluster_' + source.path)}")
-            else:
-                tail = source.path
-            if edge.terminal:
-                head = _outcome_id(node, edge.target)
-            else:
-                target = by_label[edge.target]
-                head = _entry(target)
-                if target.is_container:
-                    attrs.append(f"lhead={_q('cluster_' + target.path)}")
-            lines.append(f"  {_q(tail)} -> {_q(head)} [{', '.join(attrs)}];")
-        for child in node.children:
-            link(child)
-
-    link(root)
+    _dot_nodes(root, 1, set(active), lines)
+    _dot_edges(root, lines)
     lines.append("}")
     return "\n".join(lines) + "\n"
+
+
+def _dot_nodes(node: StateNode, depth: int, active: set[str], lines: list[str]) -> None:
+    """The DOT node of ``node``, or its cluster with everything inside it."""
+    pad = "  " * depth
+    if not node.is_container:
+        fill = _ACTIVE if node.path in active else "white"
+        lines.append(f"{pad}{_q(node.path)} [label={_q(node.label)}, fillcolor={_q(fill)}];")
+        return
+    fill = _CONTAINER_FILL.get(node.type, "#f5f5f5")
+    lines.append(f"{pad}subgraph {_q('cluster_' + node.path)} {{")
+    if node.path in active:
+        # An active container: its frame in the active colour (its inside keeps the
+        # container's fill, so the active state inside it still stands out).
+        mark = f'style="rounded,filled,bold"; color={_q(_ACTIVE_STROKE)}; penwidth=2.5;'
+    else:
+        mark = 'style="rounded,filled";'
+    lines.append(f"{pad}  label={_q(f'{node.label} ({node.type})')}; {mark} fillcolor={_q(fill)};")
+    if not node.children:
+        lines.append(f'{pad}  {_q(node.path + ":empty")} [label="(empty)", shape=plaintext];')
+    for child in node.children:
+        _dot_nodes(child, depth + 1, active, lines)
+    for outcome in node.outcomes:
+        lines.append(
+            f"{pad}  {_q(_outcome_id(node, outcome))} [label={_q(outcome)}, shape=ellipse, "
+            'style=filled, fillcolor="#e0e0e0", fontsize=9];'
+        )
+    lines.append(f"{pad}}}")
+
+
+def _dot_edges(node: StateNode, lines: list[str]) -> None:
+    """The DOT edges of the transitions of ``node`` and of every container inside it."""
+    if not node.is_container:
+        return
+    by_label = {c.label: c for c in node.children}
+    for edge in node.edges:
+        source = by_label.get(edge.source)
+        if source is not None:
+            lines.append(_dot_edge(node, by_label, source, edge))
+    for child in node.children:
+        _dot_edges(child, lines)
+
+
+def _dot_edge(
+    node: StateNode, by_label: Mapping[str, StateNode], source: StateNode, edge: Edge
+) -> str:
+    """The DOT edge of a transition of ``node`` from its child ``source``."""
+    attrs = [f"label={_q(edge.outcome)}"]
+    if source.is_container:
+        tail = _outcome_id(source, edge.outcome)
+        if edge.outcome not in source.outcomes:
+            tail = _entry(source)
+            attrs.append(f"ltail={_q('cluster_' + source.path)}")
+    else:
+        tail = source.path
+    if edge.terminal:
+        head = _outcome_id(node, edge.target)
+    else:
+        target = by_label[edge.target]
+        head = _entry(target)
+        if target.is_container:
+            attrs.append(f"lhead={_q('cluster_' + target.path)}")
+    return f"  {_q(tail)} -> {_q(head)} [{', '.join(attrs)}];"
 
 
 def _mid(path: str) -> str:

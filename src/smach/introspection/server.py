@@ -91,6 +91,7 @@ class ViewerServer:
         self.host = host
         self.port = int(self._httpd.server_address[1])
         self._pump_stop = threading.Event()
+        self._pump_lock = threading.Lock()  # the pump thread and catch_up() take turns
         self._pump()  # the journal's records are there before the first request
         self._threads = [
             threading.Thread(
@@ -107,8 +108,17 @@ class ViewerServer:
         return f"http://{host}:{self.port}/"
 
     # -- pump ------------------------------------------------------------------------------
+    def catch_up(self) -> int:
+        """Fold what the source has now, without waiting for the pump's next turn (so
+        that a page asked right after a run ended shows its end). Returns how many
+        records were folded."""
+        return self._pump()
+
     def _pump(self) -> int:
-        records = self.source.poll()
+        with self._pump_lock:
+            return self._fold(self.source.poll())
+
+    def _fold(self, records: list[dict[str, Any]]) -> int:
         if records:
             with self._cond:
                 for record in records:

@@ -12,7 +12,8 @@ from collections.abc import Collection, Mapping
 from importlib import resources
 from xml.sax.saxutils import escape, quoteattr
 
-from smach.introspection.layout import Layout, Shape, layout, text_width
+from smach.introspection.layout import layout
+from smach.introspection.shapes import EdgeShape, Layout, Shape, text_width
 from smach.introspection.structure import StateNode
 
 __all__ = ["graph_css", "render_svg"]
@@ -55,19 +56,64 @@ def render_svg(
     reached_set = set(reached)
     outcomes = outcomes or {}
     taken = taken or {}
-    hidden_active: set[str] = set()
-    collapsed_paths = [s.path for s in lay.shapes if s.kind == "collapsed"]
-    for path in active_set:
-        for c in collapsed_paths:
-            if path.startswith(c + "/"):
-                hidden_active.add(c)
+    # The classes a box gets, in this order, for being in each collection of paths.
+    cluster_marks: list[tuple[str, Collection[str]]] = [
+        ("active", active_set),
+        ("preempt", preempt_set),
+        ("error", error_set),
+    ]
+    node_marks: list[tuple[str, Collection[str]]] = [
+        ("active", active_set),
+        ("contains-active", _hidden_active(lay, active_set)),
+        ("preempt", preempt_set),
+        ("error", error_set),
+        ("visited", outcomes),
+    ]
+    clusters = [s for s in lay.shapes if s.kind == "container"]
+    nodes = [s for s in lay.shapes if s.kind != "container"]
 
-    out: list[str] = []
+    out = _head(lay, title, standalone)
+    out.append('<g class="clusters">')
+    out.extend(_cluster(s, _marked(s, cluster_marks)) for s in clusters)
+    out.append("</g>")
+    out.append('<g class="edges">')
+    out.extend(
+        _edge(e, list(taken.get(e.container, ()))[:2] == [e.source, e.outcome]) for e in lay.edges
+    )
+    out.append("</g>")
+    out.append('<g class="nodes">')
+    for s in nodes:
+        if s.kind == "outcome":
+            out.append(_pill(s, s.path in reached_set))
+        else:
+            out.append(_node(s, _marked(s, node_marks), outcomes))
+    out.append("</g>")
+    badges = [_badge(s) for s in clusters if s.path in preempt_set]
+    badges += [_badge(s) for s in nodes if s.kind != "outcome" and s.path in preempt_set]
+    if badges:
+        out.append('<g class="badges">' + "".join(badges) + "</g>")
+    out.append("</svg>")
+    return "\n".join(out) + "\n"
+
+
+def _marked(s: Shape, marks: list[tuple[str, Collection[str]]]) -> list[str]:
+    """The names of the ``marks`` whose paths hold the path of ``s``."""
+    return [name for name, paths in marks if s.path in paths]
+
+
+def _hidden_active(lay: Layout, active: Collection[str]) -> set[str]:
+    """The collapsed containers that hold an active state."""
+    collapsed_paths = [s.path for s in lay.shapes if s.kind == "collapsed"]
+    return {c for path in active for c in collapsed_paths if path.startswith(c + "/")}
+
+
+def _head(lay: Layout, title: str | None, standalone: bool) -> list[str]:
+    """The opening of the picture: the ``<svg>`` tag, the title, arrow heads and style."""
     w, h = lay.width, lay.height
-    out.append(
+    out = [
         f'<svg xmlns="http://www.w3.org/2000/svg" class="smach-graph" '
         f'viewBox="0 0 {w:.0f} {h:.0f}" width="{w:.0f}" height="{h:.0f}">'
-    )
+    ]
     if title:
         out.append(f"<title>{escape(title)}</title>")
     out.append("<defs>")
@@ -81,97 +127,72 @@ def render_svg(
     out.append("</defs>")
     if standalone:
         out.append(f'<rect x="0" y="0" width="{w:.0f}" height="{h:.0f}" fill="#ffffff"/>')
+    return out
 
-    badges: list[str] = []
-    out.append('<g class="clusters">')
-    for s in lay.shapes:
-        if s.kind != "container":
-            continue
-        extra = []
-        if s.path in active_set:
-            extra.append("active")
-        if s.path in preempt_set:
-            extra.append("preempt")
-            badges.append(_badge(s))
-        if s.path in error_set:
-            extra.append("error")
-        out.append(
-            f'<g class="{_classes("cluster", s, extra)}" data-path={quoteattr(s.path)}>'
-            f"<title>{escape(s.path)} ({escape(s.type)})</title>"
-            f'<rect x="{s.x:.1f}" y="{s.y:.1f}" width="{s.w:.1f}" height="{s.h:.1f}" rx="10"/>'
-        )
-        tx = s.x + 12
-        if s.depth > 0:
-            out.append(
-                f'<text class="toggle" data-toggle={quoteattr(s.path)} x="{s.x + 10:.1f}" '
-                f'y="{s.y + 13:.1f}">\u2212</text>'
-            )
-            tx += 14
-        out.append(
-            f'<text class="ctitle" x="{tx:.1f}" y="{s.y + 13:.1f}">{escape(s.label)}'
-            f'<tspan class="ctype" dx="8">{escape(s.type)}</tspan></text></g>'
-        )
-    out.append("</g>")
 
-    out.append('<g class="edges">')
-    for e in lay.edges:
-        is_taken = list(taken.get(e.container, ()))[:2] == [e.source, e.outcome]
-        cls = "edge taken" if is_taken else "edge"
-        marker = "arrow-taken" if is_taken else "arrow"
-        out.append(
-            f'<g class="{cls}" data-container={quoteattr(e.container)} '
-            f"data-source={quoteattr(e.source)} data-outcome={quoteattr(e.outcome)}>"
-            f'<path d="{e.d}" marker-end="url(#{marker})"/>'
-            f'<text x="{e.label_x:.1f}" y="{e.label_y:.1f}" text-anchor="middle">'
-            f"{escape(e.outcome)}</text></g>"
+def _cluster(s: Shape, extra: Collection[str]) -> str:
+    """An expanded container: its frame, its fold toggle (below the root) and its title."""
+    tx = s.x + 12
+    toggle = ""
+    if s.depth > 0:
+        toggle = (
+            f'\n<text class="toggle" data-toggle={quoteattr(s.path)} x="{s.x + 10:.1f}" '
+            f'y="{s.y + 13:.1f}">\u2212</text>'
         )
-    out.append("</g>")
+        tx += 14
+    return (
+        f'<g class="{_classes("cluster", s, extra)}" data-path={quoteattr(s.path)}>'
+        f"<title>{escape(s.path)} ({escape(s.type)})</title>"
+        f'<rect x="{s.x:.1f}" y="{s.y:.1f}" width="{s.w:.1f}" height="{s.h:.1f}" rx="10"/>'
+        f"{toggle}\n"
+        f'<text class="ctitle" x="{tx:.1f}" y="{s.y + 13:.1f}">{escape(s.label)}'
+        f'<tspan class="ctype" dx="8">{escape(s.type)}</tspan></text></g>'
+    )
 
-    out.append('<g class="nodes">')
-    for s in lay.shapes:
-        if s.kind == "container":
-            continue
-        cx, cy = s.x + s.w / 2, s.y + s.h / 2
-        if s.kind == "outcome":
-            cls = "outcome reached" if s.path in reached_set else "outcome"
-            out.append(
-                f'<g class="{cls}" data-path={quoteattr(s.path)}>'
-                f'<rect x="{s.x:.1f}" y="{s.y:.1f}" width="{s.w:.1f}" height="{s.h:.1f}" rx="10"/>'
-                f'<text class="label" x="{cx:.1f}" y="{cy:.1f}" text-anchor="middle">'
-                f"{escape(s.label)}</text></g>"
-            )
-            continue
-        extra = []
-        if s.path in active_set:
-            extra.append("active")
-        if s.path in hidden_active:
-            extra.append("contains-active")
-        if s.path in preempt_set:
-            extra.append("preempt")
-            badges.append(_badge(s))
-        if s.path in error_set:
-            extra.append("error")
-        if s.path in outcomes:
-            extra.append("visited")
-        base = "node collapsed" if s.kind == "collapsed" else "node state"
-        toggle = f" data-toggle={quoteattr(s.path)}" if s.kind == "collapsed" else ""
-        sub = f"▸ {s.count} states" if s.kind == "collapsed" else ""
-        if s.path in outcomes and s.kind != "collapsed":
-            sub = f"→ {outcomes[s.path]}"
-        out.append(
-            f'<g class="{_classes(base, s, extra)}" data-path={quoteattr(s.path)}{toggle}>'
-            f"<title>{escape(s.path)} ({escape(s.type)})</title>"
-            f'<rect x="{s.x:.1f}" y="{s.y:.1f}" width="{s.w:.1f}" height="{s.h:.1f}" rx="7"/>'
-            f'<text class="label" x="{cx:.1f}" y="{cy - 6:.1f}" text-anchor="middle">'
-            f"{escape(s.label)}</text>"
-            f'<text class="sub" x="{cx:.1f}" y="{cy + 9:.1f}" text-anchor="middle">'
-            f"{escape(sub)}</text></g>"
-        )
-    out.append("</g>")
-    if badges:
-        out.append('<g class="badges">' + "".join(badges) + "</g>")
-    out.append("</svg>")
-    return "\n".join(out) + "\n"
+
+def _edge(e: EdgeShape, taken: bool) -> str:
+    """A transition: its path and its outcome label (``taken``: the last one taken)."""
+    cls = "edge taken" if taken else "edge"
+    marker = "arrow-taken" if taken else "arrow"
+    return (
+        f'<g class="{cls}" data-container={quoteattr(e.container)} '
+        f"data-source={quoteattr(e.source)} data-outcome={quoteattr(e.outcome)}>"
+        f'<path d="{e.d}" marker-end="url(#{marker})"/>'
+        f'<text x="{e.label_x:.1f}" y="{e.label_y:.1f}" text-anchor="middle">'
+        f"{escape(e.outcome)}</text></g>"
+    )
+
+
+def _pill(s: Shape, reached: bool) -> str:
+    """A container's outcome (``reached``: the container returned it)."""
+    cx, cy = s.x + s.w / 2, s.y + s.h / 2
+    cls = "outcome reached" if reached else "outcome"
+    return (
+        f'<g class="{cls}" data-path={quoteattr(s.path)}>'
+        f'<rect x="{s.x:.1f}" y="{s.y:.1f}" width="{s.w:.1f}" height="{s.h:.1f}" rx="10"/>'
+        f'<text class="label" x="{cx:.1f}" y="{cy:.1f}" text-anchor="middle">'
+        f"{escape(s.label)}</text></g>"
+    )
+
+
+def _node(s: Shape, extra: Collection[str], outcomes: Mapping[str, str]) -> str:
+    """A state, or a collapsed container (with its count of states and its toggle)."""
+    cx, cy = s.x + s.w / 2, s.y + s.h / 2
+    folded = s.kind == "collapsed"
+    base = "node collapsed" if folded else "node state"
+    toggle = f" data-toggle={quoteattr(s.path)}" if folded else ""
+    sub = f"▸ {s.count} states" if folded else ""
+    if s.path in outcomes and not folded:
+        sub = f"→ {outcomes[s.path]}"
+    return (
+        f'<g class="{_classes(base, s, extra)}" data-path={quoteattr(s.path)}{toggle}>'
+        f"<title>{escape(s.path)} ({escape(s.type)})</title>"
+        f'<rect x="{s.x:.1f}" y="{s.y:.1f}" width="{s.w:.1f}" height="{s.h:.1f}" rx="7"/>'
+        f'<text class="label" x="{cx:.1f}" y="{cy - 6:.1f}" text-anchor="middle">'
+        f"{escape(s.label)}</text>"
+        f'<text class="sub" x="{cx:.1f}" y="{cy + 9:.1f}" text-anchor="middle">'
+        f"{escape(sub)}</text></g>"
+    )
 
 
 BADGE_TEXT = "PREEMPT REQUESTED"

@@ -25,8 +25,10 @@ __all__ = [
     "DurabilityPolicy",
     "GoalResponse",
     "GoalStatus",
+    "InvalidHandle",
     "MultiThreadedExecutor",
     "QoSProfile",
+    "RCLError",
     "ReentrantCallbackGroup",
     "StringMsg",
     "rclpy",
@@ -91,3 +93,8 @@ StringMsg: Any = _load("std_msgs.msg").String
 Node: Any = _load("rclpy.node").Node
 SubscriptionEventCallbacks: Any = _events.SubscriptionEventCallbacks
 PublisherEventCallbacks: Any = _events.PublisherEventCallbacks
+_implementation: Any = _load("rclpy.impl.implementation_singleton").rclpy_implementation
+#: Raised by rclpy when a destroyed (or being destroyed) node, client... is used.
+InvalidHandle: Any = _implementation.InvalidHandle
+#: Raised by rcl calls, e.g. on an entity whose context was shut down.
+RCLError: Any = _implementation.RCLError

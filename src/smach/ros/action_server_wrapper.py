@@ -24,7 +24,7 @@ from typing import Any
 
 import smach
 from smach.introspection.events import Event, Transition, UserdataWritten
-from smach.ros._api import ActionServer, CancelResponse, GoalResponse
+from smach.ros._api import ActionServer, CancelResponse, GoalResponse, InvalidHandle, RCLError
 from smach.ros.executor import SmachExecutor
 from smach.ros.shared_node import node_optional
 
@@ -91,6 +91,7 @@ class ActionServerWrapper:
         self.userdata = smach.UserData()
         self._busy = threading.Lock()
         self._goal_handle: Any = None
+        self._closing = False
         self._feedback_keys = {feedback_key, *self._feedback_slots_map.values()}
 
         helper = SmachExecutor.for_node(node)
@@ -116,6 +117,8 @@ class ActionServerWrapper:
 
     # -- action server callbacks (executor threads) ---------------------------------------------
     def _on_goal(self, goal: Any) -> Any:
+        if self._closing:
+            return GoalResponse.REJECT
         if self._busy.locked():
             smach.logwarn(
                 f"ActionServerWrapper {self._resolved_name}: rejecting a goal, "
@@ -139,6 +142,15 @@ class ActionServerWrapper:
                 goal_handle.canceled()
                 return self._spec.Result()
             return self._run(goal_handle)
+        except (InvalidHandle, RCLError) as exc:
+            if not self._closing:
+                raise
+            # destroy() gave the goal its time; the server went away under it.
+            smach.logwarn(
+                f"ActionServerWrapper {self._resolved_name}: the server was destroyed while "
+                f"a goal ran ({type(exc).__name__}: {exc})"
+            )
+            return self._spec.Result()
         finally:
             self._goal_handle = None
             self._busy.release()
@@ -203,8 +215,14 @@ class ActionServerWrapper:
         elif not isinstance(event, Transition):
             return
         feedback = self._feedback()
-        if feedback is not None:
+        if feedback is None:
+            return
+        try:
             goal_handle.publish_feedback(feedback)
+        except (InvalidHandle, RCLError):
+            # While destroy() runs, the server may go first: the feedback has nobody to go to.
+            if not self._closing:
+                raise
 
     def _feedback(self) -> Any:
         data = self.wrapped_container.userdata
@@ -218,8 +236,18 @@ class ActionServerWrapper:
                 setattr(feedback, field, data[key])
         return feedback
 
-    def destroy(self) -> None:
-        """Stop serving (the action disappears from the ROS graph)."""
+    def destroy(self, timeout: float = 5.0) -> None:
+        """Stop serving (the action disappears from the ROS graph).
+
+        A goal still running has its container preempted and ``timeout`` seconds to
+        end before the server goes, so that it does not fail in its executor thread
+        on a destroyed server; new goals are rejected meanwhile.
+        """
+        self._closing = True
+        if self._busy.locked():
+            self.wrapped_container.request_preempt()
+            if self._busy.acquire(timeout=timeout):
+                self._busy.release()
         self.wrapped_container.remove_listener(self._on_event)
         self._server.destroy()
 

@@ -46,7 +46,13 @@ from smach.ros._api import (
     rclpy,
 )
 
-__all__ = ["SmachExecutor", "publisher_events", "seconds", "subscription_events"]
+__all__ = [
+    "SmachExecutor",
+    "publisher_events",
+    "seconds",
+    "subscription_events",
+    "wait_for_callbacks",
+]
 
 #: Executor threads: callbacks are short, except action-server goals (one per wrapper).
 EXECUTOR_THREADS = 8
@@ -147,16 +153,53 @@ class SmachExecutor:
         finally:
             self._alive = False
 
-    def shutdown(self, timeout: float = 2.0) -> None:
-        """Stop the executor thread and destroy the helper node (tests, clean exits)."""
+    def shutdown(self, timeout: float = 2.0) -> bool:
+        """Stop the executor thread and destroy the helper node (tests, clean exits).
+
+        The executor and the node are destroyed only once no callback runs on them any
+        more: destroying them under a running callback (an action-server goal, a
+        state's client call) makes that callback fail in its thread with
+        ``InvalidHandle``. If the thread or a callback still runs after ``timeout``
+        seconds, both are left to the context's shutdown (``rclpy.shutdown``) and
+        False is returned.
+        """
         self._alive = False
+        deadline = time.monotonic() + timeout
         self._thread.join(timeout)
         with SmachExecutor._lock:
             if SmachExecutor._instances.get(id(self.context)) is self:
                 del SmachExecutor._instances[id(self.context)]
-        self.executor.shutdown(timeout_sec=timeout)
+        if self._thread.is_alive() or not wait_for_callbacks(
+            self.executor, max(0.0, deadline - time.monotonic())
+        ):
+            smach.logwarn(
+                f"smach ROS executor: a callback still runs after {timeout} s; the helper "
+                "node is left to rclpy.shutdown()"
+            )
+            return False
+        self.executor.shutdown(timeout_sec=0)
         if self.context.ok():
             self.node.destroy_node()
+        return True
+
+
+def wait_for_callbacks(executor: Any, timeout: float) -> bool:
+    """Wait until no callback that ``executor`` started runs any more (call it once
+    nothing spins the executor): True if so within ``timeout`` seconds.
+
+    rclpy's ``Executor.shutdown(timeout_sec)`` (rclpy 7.1 and 9.1 alike) does not
+    wait for them, although it says it does, and destroys the executor's guard
+    condition, which a callback finishing afterwards triggers: ``InvalidHandle`` in
+    a thread of the executor's pool. A :class:`MultiThreadedExecutor` keeps the
+    callbacks it started in ``_futures`` in both versions; a single-threaded one
+    runs them in the spinning thread, so there is nothing to wait for.
+    """
+    deadline = time.monotonic() + timeout
+    while any(not task.done() for task in list(getattr(executor, "_futures", ()))):
+        if time.monotonic() >= deadline:
+            return False
+        time.sleep(0.01)
+    return True
 
 
 def _stop_all() -> None:

@@ -23,6 +23,7 @@ the client parses JSON of bounded size and ignores anything else.
 
 from __future__ import annotations
 
+import functools
 import json
 import re
 import threading
@@ -424,20 +425,13 @@ class IntrospectionClient:
         subs = [
             helper_node.create_subscription(
                 StringMsg,
-                base + STRUCTURE_TOPIC,
-                lambda msg: self._on_message(base, msg, self._structure),
+                base + suffix,
+                functools.partial(self._on_message, base, store=store),
                 _qos(100),
                 callback_group=self._helper.callback_group,
-                event_callbacks=subscription_events(base + STRUCTURE_TOPIC),
-            ),
-            helper_node.create_subscription(
-                StringMsg,
-                base + STATUS_TOPIC,
-                lambda msg: self._on_message(base, msg, self._status),
-                _qos(100),
-                callback_group=self._helper.callback_group,
-                event_callbacks=subscription_events(base + STATUS_TOPIC),
-            ),
+                event_callbacks=subscription_events(base + suffix),
+            )
+            for suffix, store in ((STRUCTURE_TOPIC, self._structure), (STATUS_TOPIC, self._status))
         ]
         with self._lock:
             self._subscriptions[base] = subs

@@ -8,13 +8,41 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any
 
 import smach
-from smach.ros._api import Node, SingleThreadedExecutor
+from smach.ros._api import InvalidHandle, Node, RCLError, SingleThreadedExecutor
 from smach.ros.executor import SmachExecutor
 
-__all__ = ["RosState", "SmachNode"]
+__all__ = ["Liveness", "RosState", "SmachNode", "StateAbort"]
+
+#: A user callback bound to its extra arguments (see ``RosState._callback``).
+Bound = tuple[Callable[..., Any], tuple[Any, ...], dict[str, Any]]
+
+
+class StateAbort(Exception):  # noqa: N818  (control flow inside execute)
+    """Something the state needed failed: it returns ``aborted`` with this message."""
+
 
 #: How often waits re-check conditions that do not wake them (the ROS graph).
 POLL_PERIOD = 0.05
+
+
+class Liveness:
+    """Whether a peer (service or action server) is still in the ROS graph, checked
+    every ``period`` seconds (None: never) from ``start``. Two failed checks in a row
+    mean it is gone: a single miss can be a graph update in flight."""
+
+    def __init__(self, ready: Callable[[], bool], period: float | None, start: float) -> None:
+        self._ready = ready
+        self._period = period
+        self.next_check = None if period is None else start + period
+        self._misses = 0
+
+    def lost(self, now: float) -> bool:
+        """Check if one is due at ``now``; True once the peer is gone."""
+        if self.next_check is None or now < self.next_check:
+            return False
+        self.next_check = now + (self._period or POLL_PERIOD)
+        self._misses = 0 if self._ready() else self._misses + 1
+        return self._misses >= 2
 
 
 class RosState(smach.State):
@@ -77,6 +105,49 @@ class RosState(smach.State):
                 return "timeout"
             self._wait(POLL_PERIOD if left is None else min(POLL_PERIOD, left))
 
+    #: The user's own liveness check of the server (``peer_alive``; None: none).
+    _peer_alive: Callable[[], bool] | None = None
+
+    def _set_peer_alive(self, peer_alive: Callable[[], bool] | None) -> None:
+        if peer_alive is not None and not callable(peer_alive):
+            raise smach.InvalidStateError(
+                f"{type(self).__name__} {self._ros_name!r}: peer_alive must be callable, "
+                f"got {peer_alive!r}"
+            )
+        self._peer_alive = peer_alive
+
+    def _liveness(self, ready: Callable[[], bool], period: float | None, start: float) -> Liveness:
+        """The liveness check of a call or goal in progress: the server is in the ROS
+        graph (``ready``) and, with ``peer_alive``, the user's own check says it lives
+        (a heartbeat, a process: what does not wait for the DDS lease)."""
+        alive = self._peer_alive
+        if alive is None:
+            return Liveness(ready, period, start)
+
+        def check() -> bool:
+            try:
+                lives = bool(alive())
+            except Exception as exc:
+                raise StateAbort(f"peer_alive raised {type(exc).__name__}: {exc}") from exc
+            return lives and ready()
+
+        return Liveness(check, period, start)
+
+    def _wait_for_peer(
+        self, ready: Callable[[], bool], what: str, timeout: float | None
+    ) -> str | None:
+        """Wait for the server (``what``, for the message) until ``ready()``: None once
+        it is there, else the outcome to return (``preempted``, or ``aborted`` after
+        ``timeout`` seconds: ``server_wait_timeout``)."""
+        if self.preempt_requested():
+            return self._preempted()
+        waited = self._wait_until(ready, timeout)
+        if waited == "preempted":
+            return self._preempted()
+        if waited == "timeout":
+            return self._fail(f"{what} did not appear within {timeout} s (server_wait_timeout)")
+        return None
+
     #: What the state talks to (service, action, topic name), for error messages.
     _ros_name: str = ""
 
@@ -86,7 +157,7 @@ class RosState(smach.State):
         cb: Callable[..., Any] | None,
         args: Sequence[Any] | None,
         kwargs: Mapping[str, Any] | None,
-    ) -> tuple[Callable[..., Any], tuple[Any, ...], dict[str, Any]] | None:
+    ) -> Bound | None:
         """Check a user callback, adopt its declared interface, bind its extra arguments."""
         if cb is None:
             return None
@@ -96,6 +167,121 @@ class RosState(smach.State):
             )
         self._adopt_interface(cb)
         return cb, tuple(args or ()), dict(kwargs or {})
+
+    def _declare_keys(
+        self,
+        input_keys: Iterable[str] | None,
+        output_keys: Iterable[str] | None,
+        sent: tuple[str | None, Sequence[str]],
+        received: tuple[str | None, Sequence[str]],
+    ) -> None:
+        """Register the userdata keys: ``input_keys`` plus the key and slots the sent
+        message (request, goal) is read from, ``output_keys`` plus those the received
+        one (response, result) is written to."""
+        for register, given, (key, slots) in (
+            (self.register_input_keys, input_keys, sent),
+            (self.register_output_keys, output_keys, received),
+        ):
+            register([*(given or ()), *slots, *([] if key is None else [key])])
+
+    def _check_slots(self, what: str, slots: Sequence[str], message_type: Any) -> None:
+        """Construction error unless every slot is a field of ``message_type``."""
+        fields = message_type.get_fields_and_field_types()
+        unknown = [slot for slot in slots if slot not in fields]
+        if unknown:
+            raise smach.InvalidStateError(
+                f"{type(self).__name__} {self._ros_name!r}: {what} {unknown} are not fields "
+                f"of {message_type.__name__}; fields: {', '.join(fields) or 'none'}"
+            )
+
+    def _compose(
+        self,
+        ud: smach.UserData,
+        what: str,
+        message: Any,
+        key: str | None,
+        slots: Sequence[str],
+        callback: Bound | None,
+        message_type: Any,
+    ) -> Any:
+        """The message to send (a goal or request): ``message``, or ``ud[key]``, with
+        ``slots`` set from the userdata, then what ``callback`` returns if anything.
+        :class:`StateAbort` when any of that fails or the result is not a
+        ``message_type``."""
+        if key is not None:
+            if key not in ud:
+                raise StateAbort(f"{what} key {key!r} is not in the userdata")
+            message = ud[key]
+        for slot in slots:
+            if slot not in ud:
+                raise StateAbort(f"{what} slot {slot!r} is not in the userdata")
+            try:
+                setattr(message, slot, ud[slot])
+            except (AttributeError, TypeError, ValueError, AssertionError) as exc:
+                raise StateAbort(f"{what} slot {slot!r}: {type(exc).__name__}: {exc}") from exc
+        replaced = self._call_back(f"{what}_cb", callback, ud, message)
+        if replaced is not None:
+            message = replaced
+        if not isinstance(message, message_type):
+            raise StateAbort(
+                f"the {what} is a {type(message).__name__}, not a {message_type.__name__}"
+            )
+        return message
+
+    def _call_back(self, what: str, callback: Bound | None, *values: Any) -> Any:
+        """``callback(*values, *args, **kwargs)``, or None without a callback;
+        :class:`StateAbort` if it raises."""
+        if callback is None:
+            return None
+        cb, args, kwargs = callback
+        try:
+            return cb(*values, *args, **kwargs)
+        except Exception as exc:
+            raise StateAbort(f"{what} raised {type(exc).__name__}: {exc}") from exc
+
+    def _chosen_outcome(self, what: str, callback: Bound | None, *values: Any) -> str | None:
+        """The outcome a ``response_cb``/``result_cb`` chose (None: it did not);
+        :class:`StateAbort` if it raises or returns an unregistered outcome."""
+        chosen = self._call_back(what, callback, *values)
+        if chosen is not None and chosen not in self.get_registered_outcomes():
+            raise StateAbort(
+                f"{what} returned {chosen!r}; registered outcomes: "
+                f"{', '.join(self.get_registered_outcomes())}"
+            )
+        return None if chosen is None else str(chosen)
+
+    @staticmethod
+    def _store(ud: smach.UserData, value: Any, key: str | None, slots: Sequence[str]) -> None:
+        """Write ``value`` (a response or result) to ``ud[key]`` and its ``slots``."""
+        if key is not None:
+            ud[key] = value
+        for slot in slots:
+            ud[slot] = getattr(value, slot)
+
+    def _guarded(self, run: Callable[[], str]) -> str:
+        """``run()`` (a state's execution), with ``aborted`` and the reason logged for
+        a :class:`StateAbort`, and for the ROS entities it uses being destroyed under
+        it (rclpy shut down, or the helper node destroyed, while the state was still
+        waiting) instead of an ``InvalidHandle`` raised in the executing thread."""
+        try:
+            return run()
+        except StateAbort as exc:
+            return self._fail(str(exc))
+        except (InvalidHandle, RCLError) as exc:
+            # InvalidHandle: an entity was destroyed. RCLError: a real failure, unless
+            # the context is gone (then every rcl call fails the same way).
+            if isinstance(exc, RCLError) and self._context_ok():
+                raise
+            return self._fail(
+                f"its ROS node was destroyed (rclpy shut down?) while it ran: "
+                f"{type(exc).__name__}: {exc}"
+            )
+
+    def _context_ok(self) -> bool:
+        try:
+            return bool(self._node.context.ok())
+        except Exception:
+            return False
 
     def _preempted(self) -> str:
         self.service_preempt()

@@ -17,7 +17,7 @@ from typing import Any
 
 import smach
 from smach.ros.executor import seconds
-from smach.ros.ros_state import POLL_PERIOD, RosState
+from smach.ros.ros_state import RosState, StateAbort
 from smach.ros.shared_node import node_optional
 
 __all__ = ["ServiceState"]
@@ -30,10 +30,13 @@ class ServiceState(RosState):
     """A state that calls a service.
 
     Signature of the ROS 2 smach_ros (the node first), plus ``server_wait_timeout``,
-    ``call_timeout``, ``call_attempts`` and ``liveness_period``. ``call_attempts``
+    ``call_timeout``, ``call_attempts``, ``liveness_period`` and ``peer_alive``. ``call_attempts``
     sends the request again when no answer came within ``call_timeout`` (for
     idempotent services: a request or response sent while DDS is still matching a
-    freshly started server can be lost). Callbacks run in the executing thread:
+    freshly started server can be lost). ``peer_alive()``, if given, is checked with
+    the server's presence in the graph every ``liveness_period``: two false answers
+    in a row abort the call (the caller's own check of the server, e.g. a heartbeat,
+    which does not wait for the DDS lease). Callbacks run in the executing thread:
     ``request_cb(ud, request, *args, **kwargs)`` may return a new request;
     ``response_cb(ud, response, *args, **kwargs)`` may return an outcome.
     """
@@ -63,6 +66,7 @@ class ServiceState(RosState):
         call_timeout: Any = None,
         call_attempts: int = 1,
         liveness_period: Any = 0.5,
+        peer_alive: Callable[[], bool] | None = None,
     ) -> None:
         super().__init__(node, outcomes=[*DEFAULT_OUTCOMES, *(outcomes or ())])
         self._ros_name = self._service_name = service_name
@@ -80,34 +84,26 @@ class ServiceState(RosState):
             )
         self._call_attempts = call_attempts
         self._liveness_period = seconds(liveness_period, "liveness_period")
+        self._set_peer_alive(peer_alive)
         self._request = service_spec.Request() if request is None else request
         self._request_key = request_key
         self._request_slots = list(request_slots or ())
         self._response_key = response_key
         self._response_slots = list(response_slots or ())
-        for what, slots, message in (
-            ("request_slots", self._request_slots, service_spec.Request),
-            ("response_slots", self._response_slots, service_spec.Response),
-        ):
-            fields = message.get_fields_and_field_types()
-            unknown = [slot for slot in slots if slot not in fields]
-            if unknown:
-                raise smach.InvalidStateError(
-                    f"ServiceState {service_name!r}: {what} {unknown} are not fields of "
-                    f"{message.__name__}; fields: {', '.join(fields) or 'none'}"
-                )
+        self._check_slots("request_slots", self._request_slots, service_spec.Request)
+        self._check_slots("response_slots", self._response_slots, service_spec.Response)
         self._request_cb = self._callback(
             "request_cb", request_cb, request_cb_args, request_cb_kwargs
         )
         self._response_cb = self._callback(
             "response_cb", response_cb, response_cb_args, response_cb_kwargs
         )
-        self.register_input_keys([*(input_keys or ()), *self._request_slots])
-        self.register_output_keys([*(output_keys or ()), *self._response_slots])
-        if request_key is not None:
-            self.register_input_keys([request_key])
-        if response_key is not None:
-            self.register_output_keys([response_key])
+        self._declare_keys(
+            input_keys,
+            output_keys,
+            (request_key, self._request_slots),
+            (response_key, self._response_slots),
+        )
 
         helper = self._helper()
         self._resolved_name: str = node.resolve_service_name(service_name)
@@ -120,99 +116,64 @@ class ServiceState(RosState):
         return bool(self._client.service_is_ready())
 
     def execute(self, ud: smach.UserData) -> str:
-        if self.preempt_requested():
-            return self._preempted()
-        waited = self._wait_until(self._ready, self._server_wait_timeout)
-        if waited == "preempted":
-            return self._preempted()
-        if waited == "timeout":
-            return self._fail(
-                f"service {self._resolved_name!r} did not appear within "
-                f"{self._server_wait_timeout} s (server_wait_timeout)"
-            )
+        return self._guarded(lambda: self._execute(ud))
 
-        request = self._request
-        if self._request_key is not None:
-            if self._request_key not in ud:
-                return self._fail(f"request key {self._request_key!r} is not in the userdata")
-            request = ud[self._request_key]
-        for slot in self._request_slots:
-            if slot not in ud:
-                return self._fail(f"request slot {slot!r} is not in the userdata")
-            try:
-                setattr(request, slot, ud[slot])
-            except (AttributeError, TypeError, ValueError, AssertionError) as exc:
-                return self._fail(f"request slot {slot!r}: {type(exc).__name__}: {exc}")
-        if self._request_cb is not None:
-            cb, args, kwargs = self._request_cb
-            try:
-                new_request = cb(ud, request, *args, **kwargs)
-            except Exception as exc:
-                return self._fail(f"request_cb raised {type(exc).__name__}: {exc}")
-            if new_request is not None:
-                request = new_request
-        if not isinstance(request, self._spec.Request):
-            return self._fail(
-                f"the request is a {type(request).__name__}, not a {self._spec.Request.__name__}"
-            )
+    def _execute(self, ud: smach.UserData) -> str:
+        absent = self._wait_for_peer(
+            self._ready, f"service {self._resolved_name!r}", self._server_wait_timeout
+        )
+        if absent is not None:
+            return absent
+        request = self._compose(
+            ud,
+            "request",
+            self._request,
+            self._request_key,
+            self._request_slots,
+            self._request_cb,
+            self._spec.Request,
+        )
+        response = self._call(request)
+        if isinstance(response, str):
+            return response
+        outcome = self._chosen_outcome("response_cb", self._response_cb, ud, response)
+        self._store(ud, response, self._response_key, self._response_slots)
+        if outcome == "preempted":
+            self.service_preempt()
+        return outcome or "succeeded"
 
-        response: Any = _NO_ANSWER
+    def _call(self, request: Any) -> Any:
+        """The response, or the outcome to return instead (a string), sending the
+        request up to ``call_attempts`` times."""
         for attempt in range(1, self._call_attempts + 1):
             self._wake.clear()
             try:
                 future = self._client.call_async(request)
             except Exception as exc:
-                return self._fail(
+                raise StateAbort(
                     f"calling {self._resolved_name!r} failed: {type(exc).__name__}: {exc}"
-                )
+                ) from exc
             future.add_done_callback(lambda _: self._wake.set())
             response = self._await_response(future)
             if response is not _NO_ANSWER:
-                break
+                return response
             if attempt < self._call_attempts:
                 smach.logwarn(
                     f"{self.path or 'ServiceState'}: service {self._resolved_name!r} did not "
                     f"answer within {self._call_timeout} s; sending the request again "
                     f"(attempt {attempt + 1} of {self._call_attempts})"
                 )
-        if response is _NO_ANSWER:
-            return self._fail(
-                f"service {self._resolved_name!r} did not answer within "
-                f"{self._call_timeout} s (call_timeout)"
-                + (f", {self._call_attempts} attempts" if self._call_attempts > 1 else "")
-            )
-        if isinstance(response, str):
-            return response
-
-        outcome = "succeeded"
-        if self._response_cb is not None:
-            cb, args, kwargs = self._response_cb
-            try:
-                cb_outcome = cb(ud, response, *args, **kwargs)
-            except Exception as exc:
-                return self._fail(f"response_cb raised {type(exc).__name__}: {exc}")
-            if cb_outcome is not None:
-                if cb_outcome not in self.get_registered_outcomes():
-                    return self._fail(
-                        f"response_cb returned {cb_outcome!r}; registered outcomes: "
-                        f"{', '.join(self.get_registered_outcomes())}"
-                    )
-                outcome = cb_outcome
-        if self._response_key is not None:
-            ud[self._response_key] = response
-        for slot in self._response_slots:
-            ud[slot] = getattr(response, slot)
-        if outcome == "preempted":
-            self.service_preempt()
-        return str(outcome)
+        raise StateAbort(
+            f"service {self._resolved_name!r} did not answer within "
+            f"{self._call_timeout} s (call_timeout)"
+            + (f", {self._call_attempts} attempts" if self._call_attempts > 1 else "")
+        )
 
     def _await_response(self, future: Any) -> Any:
         """The response, the outcome to return instead (a string), or ``_NO_ANSWER``."""
         start = time.monotonic()
         deadline = None if self._call_timeout is None else start + self._call_timeout
-        period = self._liveness_period
-        next_check = None if period is None else start + period
-        lost = 0
+        liveness = self._liveness(self._ready, self._liveness_period, start)
         while not future.done():
             if self.preempt_requested():
                 self._client.remove_pending_request(future)
@@ -221,22 +182,17 @@ class ServiceState(RosState):
             if deadline is not None and now >= deadline:
                 self._client.remove_pending_request(future)
                 return _NO_ANSWER
-            if next_check is not None and now >= next_check:
-                next_check = now + (period or POLL_PERIOD)
-                lost = 0 if self._ready() else lost + 1
-                if lost >= 2:
-                    self._client.remove_pending_request(future)
-                    return self._fail(
-                        f"service {self._resolved_name!r} disappeared before answering"
-                    )
-            limits = [t for t in (deadline, next_check) if t is not None]
+            if liveness.lost(now):
+                self._client.remove_pending_request(future)
+                raise StateAbort(f"service {self._resolved_name!r} disappeared before answering")
+            limits = [t for t in (deadline, liveness.next_check) if t is not None]
             self._wait(None if not limits else min(limits) - time.monotonic())
         try:
             return future.result()
         except Exception as exc:
-            return self._fail(
+            raise StateAbort(
                 f"service {self._resolved_name!r} failed: {type(exc).__name__}: {exc}"
-            )
+            ) from exc
 
     def destroy(self) -> None:
         """Release the service client (the state cannot execute afterwards)."""

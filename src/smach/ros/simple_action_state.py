@@ -9,7 +9,8 @@ Every wait is bounded and preemptable:
   -> the goal is cancelled, then ``preempted`` once the server reports it cancelled;
   a server that leaves the ROS graph (``server_is_ready()`` turns false, checked every
   ``liveness_period`` seconds) -> ``aborted``. A crashed server process leaves the graph
-  when its DDS participant lease expires (Fast DDS: 20 s by default, see docs/ros.md);
+  when its DDS participant lease expires (Fast DDS: 20 s by default, see docs/ros.md),
+  or ``peer_alive()`` (the caller's own check, if given) answers false twice in a row;
 * cancelling: the server has ``preempt_timeout`` seconds to finish; otherwise ``aborted``.
 
 ``request_preempt()`` returns at once (the original blocked the caller, and with it the
@@ -54,8 +55,10 @@ class _Run:
 class SimpleActionState(RosState):
     """A state that sends a goal to an action server and waits for the result.
 
-    Signature of the ROS 2 smach_ros (the node first), plus ``feedback_cb`` and
-    ``liveness_period``. Timeouts accept float seconds or an rclpy ``Duration``.
+    Signature of the ROS 2 smach_ros (the node first), plus ``feedback_cb``,
+    ``liveness_period`` and ``peer_alive`` (the caller's own check that the server
+    lives, e.g. a heartbeat: two false answers in a row, ``liveness_period`` apart,
+    abort an active goal without waiting for the DDS lease). Timeouts accept float seconds or an rclpy ``Duration``.
     ``outcomes`` are added to ``succeeded``, ``aborted`` and ``preempted``.
 
     Callbacks run in the thread executing the state:
@@ -94,6 +97,7 @@ class SimpleActionState(RosState):
         feedback_cb_args: Sequence[Any] | None = None,
         feedback_cb_kwargs: Mapping[str, Any] | None = None,
         liveness_period: Any = 0.5,
+        peer_alive: Callable[[], bool] | None = None,
     ) -> None:
         super().__init__(node, outcomes=[*DEFAULT_OUTCOMES, *(outcomes or ())])
         self._ros_name = self._action_name = action_name
@@ -104,6 +108,7 @@ class SimpleActionState(RosState):
         )
         self._server_wait_timeout = seconds(server_wait_timeout, "server_wait_timeout")
         self._liveness_period = seconds(liveness_period, "liveness_period")
+        self._set_peer_alive(peer_alive)
 
         if goal is None:
             goal = action_spec.Goal()
@@ -126,12 +131,9 @@ class SimpleActionState(RosState):
             "feedback_cb", feedback_cb, feedback_cb_args, feedback_cb_kwargs
         )
 
-        self.register_input_keys([*(input_keys or ()), *self._goal_slots])
-        self.register_output_keys([*(output_keys or ()), *self._result_slots])
-        if goal_key is not None:
-            self.register_input_keys([goal_key])
-        if result_key is not None:
-            self.register_output_keys([result_key])
+        self._declare_keys(
+            input_keys, output_keys, (goal_key, self._goal_slots), (result_key, self._result_slots)
+        )
 
         helper = self._helper()
         self._resolved_name: str = node.resolve_topic_name(action_name)
@@ -140,38 +142,22 @@ class SimpleActionState(RosState):
         )
         self._helper_node: Any = helper.node
 
-    # -- construction helpers ---------------------------------------------------------
-    def _check_slots(self, what: str, slots: list[str], message_type: Any) -> None:
-        fields = message_type.get_fields_and_field_types()
-        unknown = [slot for slot in slots if slot not in fields]
-        if unknown:
-            raise smach.InvalidStateError(
-                f"SimpleActionState {self._action_name!r}: {what} {unknown} are not fields of "
-                f"{message_type.__name__}; fields: {', '.join(fields) or 'none'}"
-            )
-
     # -- running ------------------------------------------------------------------------
     def _server_ready(self) -> bool:
         return bool(self._client.server_is_ready())
 
     def execute(self, ud: smach.UserData) -> str:
-        if self.preempt_requested():
-            return self._preempted()
+        return self._guarded(lambda: self._execute(ud))
 
-        waited = self._wait_until(self._server_ready, self._server_wait_timeout)
-        if waited == "preempted":
-            return self._preempted()
-        if waited == "timeout":
-            return self._fail(
-                f"action server {self._resolved_name!r} did not appear within "
-                f"{self._server_wait_timeout} s (server_wait_timeout)"
-            )
-
-        try:
-            goal = self._make_goal(ud)
-        except _Abort as exc:
-            return self._fail(str(exc))
-
+    def _execute(self, ud: smach.UserData) -> str:
+        absent = self._wait_for_peer(
+            self._server_ready, f"action server {self._resolved_name!r}", self._server_wait_timeout
+        )
+        if absent is not None:
+            return absent
+        goal = self._compose(
+            ud, "goal", self._goal, self._goal_key, self._goal_slots, self._goal_cb, self._spec.Goal
+        )
         run = _Run()
         self._wake.clear()
         send = self._client.send_goal_async(
@@ -179,31 +165,6 @@ class SimpleActionState(RosState):
         )
         send.add_done_callback(lambda future: self._on_goal_response(run, future))
         return self._follow(ud, run)
-
-    def _make_goal(self, ud: smach.UserData) -> Any:
-        goal = self._goal
-        if self._goal_key is not None:
-            if self._goal_key not in ud:
-                raise _Abort(f"goal key {self._goal_key!r} is not in the userdata")
-            goal = ud[self._goal_key]
-        for slot in self._goal_slots:
-            if slot not in ud:
-                raise _Abort(f"goal slot {slot!r} is not in the userdata")
-            try:
-                setattr(goal, slot, ud[slot])
-            except (AttributeError, TypeError, ValueError, AssertionError) as exc:
-                raise _Abort(f"goal slot {slot!r}: {type(exc).__name__}: {exc}") from exc
-        if self._goal_cb is not None:
-            cb, args, kwargs = self._goal_cb
-            try:
-                new_goal = cb(ud, goal, *args, **kwargs)
-            except Exception as exc:
-                raise _Abort(f"goal_cb raised {type(exc).__name__}: {exc}") from exc
-            if new_goal is not None:
-                goal = new_goal
-        if not isinstance(goal, self._spec.Goal):
-            raise _Abort(f"the goal is a {type(goal).__name__}, not a {self._spec.Goal.__name__}")
-        return goal
 
     # Callbacks from the executor thread: store and wake, nothing else.
     def _on_goal_response(self, run: _Run, future: Any) -> None:
@@ -237,8 +198,7 @@ class SimpleActionState(RosState):
         exec_deadline = None if self._exec_timeout is None else start + self._exec_timeout
         cancel_deadline: float | None = None
         cancel_reason = ""
-        next_liveness = None if self._liveness_period is None else start + self._liveness_period
-        lost_checks = 0
+        liveness = self._liveness(self._server_ready, self._liveness_period, start)
 
         while True:
             self._drain_feedback(ud, run)
@@ -276,20 +236,15 @@ class SimpleActionState(RosState):
                     f"within {self._preempt_timeout} s (preempt_timeout) after a {what}"
                 )
 
-            if next_liveness is not None and now >= next_liveness:
-                next_liveness = now + (self._liveness_period or 0.0)
-                # Two checks in a row: a single miss can be a graph update in flight.
-                lost_checks = 0 if self._server_ready() else lost_checks + 1
-                if lost_checks >= 2:
-                    return self._fail(
-                        f"action server {self._resolved_name!r} disappeared while the goal "
-                        "was active"
-                    )
+            if liveness.lost(now):
+                return self._fail(
+                    f"action server {self._resolved_name!r} disappeared while the goal was active"
+                )
 
             timeouts = [
                 t
                 for t in (
-                    next_liveness,
+                    liveness.next_check,
                     None if run.goal_response else response_deadline,
                     exec_deadline if cancel_deadline is None else cancel_deadline,
                 )
@@ -331,25 +286,10 @@ class SimpleActionState(RosState):
                     f"{self._exec_timeout} s"
                 )
 
-        if self._result_cb is not None:
-            cb, args, kwargs = self._result_cb
-            try:
-                cb_outcome = cb(ud, status, result, *args, **kwargs)
-            except Exception as exc:
-                return self._fail(f"result_cb raised {type(exc).__name__}: {exc}")
-            if cb_outcome is not None:
-                if cb_outcome not in self.get_registered_outcomes():
-                    return self._fail(
-                        f"result_cb returned {cb_outcome!r}; registered outcomes: "
-                        f"{', '.join(self.get_registered_outcomes())}"
-                    )
-                outcome = cb_outcome
-
+        chosen = self._chosen_outcome("result_cb", self._result_cb, ud, status, result)
+        outcome = chosen or outcome
         if result is not None:
-            if self._result_key is not None:
-                ud[self._result_key] = result
-            for slot in self._result_slots:
-                ud[slot] = getattr(result, slot)
+            self._store(ud, result, self._result_key, self._result_slots)
 
         if outcome == "preempted":
             self.service_preempt()
@@ -359,7 +299,3 @@ class SimpleActionState(RosState):
     def destroy(self) -> None:
         """Release the action client (the state cannot execute afterwards)."""
         self._client.destroy()
-
-
-class _Abort(Exception):  # noqa: N818  (control flow inside execute)
-    """Building the goal failed: the state returns ``aborted`` with this message."""

@@ -76,3 +76,14 @@ def test_a_problem_naming_another_domain_is_planned_with_a_warning_by_every_comm
         err = capsys.readouterr().err
         assert f"{problem}:" in err and "this problem is for domain 'elsewhere'" in err
         assert f"planning it with {name!r}" in err
+
+
+def test_findings_print_a_warning_line_then_a_note_line_on_stderr(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    from plan_bridge.cli.base import Findings
+
+    Findings(["the goal is empty"], notes=["the goal replaces (at a)"]).show()
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert captured.err == "warning: the goal is empty\nnote: the goal replaces (at a)\n"

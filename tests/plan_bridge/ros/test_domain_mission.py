@@ -21,7 +21,7 @@ from typing import Any
 
 import pytest
 
-pytest.importorskip("smach.ros", reason="needs rclpy (the ros extra)")
+pytest.importorskip("smach.ros._api", reason="needs rclpy (the ros extra)")
 
 from plan_bridge.execution.events import StepFinished
 from plan_bridge.execution.executive import Executive
@@ -30,6 +30,7 @@ from plan_bridge.planning.planner import get_planner
 from plan_bridge.ros import remote_facts
 from plan_bridge.ros.connection import RobotConnection, RobotError
 from smach.introspection.journal import read_states
+from smach.ros.dds import FAST_DDS_2_VARIABLE, FAST_DDS_3_VARIABLE
 
 pytestmark = pytest.mark.ros
 
@@ -213,6 +214,66 @@ def test_a_robot_killed_mid_skill_ends_the_mission_within_a_bounded_time(
         f"planner calls, {ex.report.planning_time_s:.1f} s planning; first step aborted after "
         f"{first_abort:.1f} s)"
     )
+
+
+@pytest.mark.timeout(120)
+def test_a_robot_with_the_default_lease_killed_mid_skill_is_caught_by_its_heartbeat(
+    robots: list[RobotConnection], target: Target, planner: Any
+) -> None:
+    # A robot started by someone else, with Fast DDS's default 20 s lease (--lease 0,
+    # no profile): only the heartbeat can tell within seconds that it died.
+    prefix = f"robot_beat_{os.getpid()}"
+    env = {
+        k: v for k, v in os.environ.items() if k not in (FAST_DDS_2_VARIABLE, FAST_DDS_3_VARIABLE)
+    }
+    command = [sys.executable, "-m", "plan_bridge.ros.skill_server", str(FETCH),
+               "--problem", str(target.problem_path), "--prefix", prefix, "--fail-rate", "0",
+               "--time-scale", "0.5", "--lease", "0"]  # fmt: skip
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, text=True, env=env)
+    lines: list[str] = []
+
+    def pump() -> None:
+        assert process.stdout is not None
+        lines.extend(line.rstrip("\n") for line in process.stdout)
+
+    pumping = threading.Thread(target=pump, daemon=True)
+    pumping.start()
+    try:
+        assert wait_for(lambda: "ready" in lines, 60)
+        robot = start(robots, target, start_robot=False, prefix=prefix)
+        ex = Executive(target.task, robot.skills(), planner)
+        aborted: list[float] = []
+        ex.add_listener(
+            lambda e: (
+                aborted.append(time.monotonic())
+                if isinstance(e, StepFinished) and e.outcome == "aborted"
+                else None
+            )
+        )
+        box: dict[str, Any] = {}
+        thread = threading.Thread(target=lambda: box.update(outcome=ex.execute()))
+        thread.start()
+        assert wait_for(lambda: "  state /navigate/DRIVE/ATTEMPT/DRIVE" in lines, 60)
+        process.kill()
+        killed = time.monotonic()
+        thread.join(90)
+        assert not thread.is_alive() and box["outcome"] == "aborted"
+        first_abort = aborted[0] - killed
+        # HEARTBEAT_TIMEOUT (3 s) + two liveness checks (1 s), with room for a loaded
+        # machine; the robot's DDS lease alone would take 20 s.
+        assert first_abort < 10.0
+        reason = robot.lost()
+        assert reason is not None and "heartbeat" in reason
+        print(
+            f"\nrobot with a 20 s lease SIGKILLed -> first step aborted after {first_abort:.1f} s"
+        )
+    finally:
+        if process.poll() is None:
+            process.kill()
+        process.wait(10)
+        pumping.join(10)  # the pipe's end reached: now it can be closed
+        assert process.stdout is not None
+        process.stdout.close()
 
 
 @pytest.mark.timeout(120)

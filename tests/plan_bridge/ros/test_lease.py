@@ -1,4 +1,5 @@
-"""The short DDS lease a robot process selects (no rclpy needed)."""
+"""The short DDS lease a robot process selects, through the variable the installed
+Fast DDS reads (FASTRTPS_DEFAULT_PROFILES_FILE for 2.x, FASTDDS_... for 3.x)."""
 
 from __future__ import annotations
 
@@ -7,9 +8,15 @@ import xml.etree.ElementTree as ET
 
 import pytest
 
-from plan_bridge.ros.lease import select_short_lease
+# plan_bridge.ros (the package) imports its ROS clients, hence rclpy.
+pytest.importorskip("smach.ros._api", reason="needs rclpy (the ros extra)")
 
-VARIABLE = "FASTDDS_DEFAULT_PROFILES_FILE"
+from plan_bridge.ros.lease import select_short_lease
+from smach.ros.dds import profiles_variable
+
+pytestmark = pytest.mark.ros
+
+VARIABLE = profiles_variable()
 NS = {"dds": "http://www.eprosima.com"}
 
 

@@ -22,6 +22,7 @@ from plan_bridge.planning.planner import PlanStep, get_planner
 from plan_bridge.ros import decode_result, encode_result, remote_facts, ros_skill, ros_skills
 from plan_bridge.ros.protocol import action_topic
 from smach.ros._api import rclpy
+from smach.ros.dds import profile_environment
 from smach.ros.executor import SmachExecutor
 
 pytestmark = pytest.mark.ros
@@ -37,7 +38,7 @@ def rooms() -> PlanningTask:
 
 class SkillServerProcess:
     def __init__(self, *args: str) -> None:
-        env = dict(os.environ, FASTDDS_DEFAULT_PROFILES_FILE=str(SHORT_LEASE))
+        env = dict(os.environ, **profile_environment(SHORT_LEASE))
         self.process = subprocess.Popen(
             [
                 sys.executable,

@@ -1,4 +1,5 @@
-"""The skill server's ``perform`` service, in process: repeats, lost replies, timeouts."""
+"""The skill server in process: its ``perform`` service (repeats, lost replies,
+timeouts) and its heartbeat."""
 
 from __future__ import annotations
 
@@ -17,9 +18,10 @@ from plan_bridge.execution.simulation import SimulatedWorld
 from plan_bridge.pddl.task import load_task
 from plan_bridge.planning.planner import PlanStep
 from plan_bridge.ros import ros_skill
+from plan_bridge.ros.protocol import HEARTBEAT_TOPIC
 from plan_bridge.ros.skill_server import SkillServer
-from smach.ros._api import MultiThreadedExecutor, rclpy
-from smach.ros.executor import SmachExecutor
+from smach.ros._api import MultiThreadedExecutor, StringMsg, rclpy
+from smach.ros.executor import SmachExecutor, subscription_events, wait_for_callbacks
 
 pytestmark = pytest.mark.ros
 
@@ -62,23 +64,29 @@ class Robot:
         )
         self.executor = MultiThreadedExecutor(num_threads=4, context=self.context)
         self.executor.add_node(self.server_node)
+        self.stop = threading.Event()
         self.spinning = threading.Thread(target=self._spin, daemon=True)
         self.spinning.start()
 
     def _spin(self) -> None:
-        while self.context.ok():
+        while self.context.ok() and not self.stop.is_set():
             self.executor.spin_once(timeout_sec=0.05)
 
     def close(self) -> None:
+        # Nothing is destroyed under a running callback: stop spinning, let the
+        # callbacks end, then destroy (else InvalidHandle in an executor thread).
         helper = SmachExecutor._instances.get(id(self.context))
         if helper is not None:
             helper.shutdown()
-        self.server.destroy()
-        rclpy.shutdown(context=self.context)
+        self.stop.set()
         self.spinning.join(5)
-        self.executor.shutdown(timeout_sec=1)
+        self.server.halt_all()
+        assert wait_for_callbacks(self.executor, 10)
+        self.executor.shutdown(timeout_sec=0)
+        self.server.destroy()
         self.client.destroy_node()
         self.server_node.destroy_node()
+        rclpy.shutdown(context=self.context)
 
 
 @pytest.fixture
@@ -141,3 +149,24 @@ def test_a_perform_of_an_unknown_action_aborts_and_runs_nothing(robot: Robot) ->
     )
     assert state.execute() == "aborted"
     assert robot.world.actions_run == 0
+
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize("robot", [{"action_time": 0.05}], indirect=True)
+def test_the_robot_publishes_a_counting_heartbeat_while_it_is_spun(robot: Robot) -> None:
+    beats: list[int] = []
+    helper = SmachExecutor.for_node(robot.client)
+    topic = f"/{robot.server.prefix}/{HEARTBEAT_TOPIC}"
+    helper.node.create_subscription(
+        StringMsg,
+        topic,
+        lambda message: beats.append(int(message.data)),
+        10,
+        callback_group=helper.callback_group,
+        event_callbacks=subscription_events(topic),
+    )
+    deadline = time.monotonic() + 20
+    while len(beats) < 3 and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert len(beats) >= 3
+    assert beats == sorted(beats) and len(set(beats)) == len(beats)

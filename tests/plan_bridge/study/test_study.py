@@ -194,3 +194,12 @@ def test_a_report_of_one_approach_at_one_fault_rate_still_draws_every_plot(
     for stem in ("success_vs_fault_rate", "time_per_run", "planning_share_and_absorption"):
         assert (tmp_path / f"{stem}.png").stat().st_size > 0
         assert f"({stem}.svg)" in text
+
+
+def test_a_results_cell_reads_as_its_number_and_an_empty_or_odd_one_as_zero() -> None:
+    from plan_bridge.study.runs import cell_number
+
+    assert cell_number("2.5") == 2.5
+    assert cell_number("") == 0.0
+    assert cell_number("n/a") == 0.0
+    assert cell_number(None) == 0.0  # type: ignore[arg-type]

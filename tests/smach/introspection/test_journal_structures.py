@@ -48,10 +48,9 @@ class Replanner(smach.Wrapper):
         for n, labels in enumerate(self.plans):
             if n:  # a new machine where the last one was
                 plan = machine(labels)
-                plan._parent = self
-                plan._adopt(self._bus, f"{self._path}/PLAN")
+                self.replace_child("PLAN", plan, self._child)
                 self._child = plan
-                self._compile()
+                self.compile_children()
             outcome = self.run_child()
             self.run_child()  # the same machine again: no new structure
         return outcome

@@ -69,3 +69,44 @@ def test_no_two_edge_labels_of_a_planned_mission_overlap(tmp_path: Path) -> None
         if record["kind"] == "structure":
             tree = graft(tree, structure_of(record), record["path"])
             assert overlapping_labels(layout(StateNode.from_dict(tree))) == []
+
+
+def ends(d: str) -> tuple[tuple[float, float], tuple[float, float]]:
+    """The first and last point of an SVG path ``M x,y ... x,y``."""
+    tokens = d.split(" ")
+    first = tokens[0].lstrip("M").split(",")
+    last = tokens[-1].lstrip("CL").split(",")
+    return (float(first[0]), float(first[1])), (float(last[0]), float(last[1]))
+
+
+def test_edges_leave_and_arrive_where_their_kind_says() -> None:
+    sm = smach.StateMachine(outcomes=["done"])
+    sm.add("A", ScriptedState(["go"]), transitions={"go": "B"})
+    sm.add(
+        "B",
+        ScriptedState(["again", "back", "go"]),
+        transitions={"again": "B", "back": "A", "go": "C"},
+    )
+    sm.add("C", ScriptedState(["go"]), transitions={"go": "done"})
+    lay = layout(snapshot(sm))
+    box = {s.path: s for s in lay.shapes}
+    a, b, c = box["/ROOT/A"], box["/ROOT/B"], box["/ROOT/C"]
+    root, pill = box["/ROOT"], box["/ROOT:done"]
+    edge = {(e.source, e.outcome): e for e in lay.edges}
+
+    # Forward: from the bottom of the source to the middle of the top of the target.
+    (sx, sy), (tx, ty) = ends(edge["A", "go"].d)
+    assert a.x < sx < a.x + a.w and sy == pytest.approx(a.y + a.h, abs=0.05)
+    assert (tx, ty) == pytest.approx((b.x + b.w / 2, b.y), abs=0.05)
+    # Into an outcome: the top of its pill.
+    (_, _), (tx, ty) = ends(edge["C", "go"].d)
+    assert (tx, ty) == pytest.approx((pill.x + pill.w / 2, pill.y), abs=0.05)
+    # A loop and a back edge: from the right-hand side of the source.
+    for outcome in ("again", "back"):
+        (sx, _), _ = ends(edge["B", outcome].d)
+        assert sx == pytest.approx(b.x + b.w, abs=0.05)
+    (_, _), (tx, ty) = ends(edge["B", "back"].d)
+    assert tx == pytest.approx(a.x + a.w, abs=0.05) and a.y < ty < a.y + a.h
+    # The container is wide enough for the labels of the edges around the right side.
+    assert all(e.label_x < root.x + root.w for e in lay.edges)
+    assert c.y > b.y > a.y

@@ -104,3 +104,43 @@ def test_plan_bridge_view_export_and_export_commands(
     assert out.read_text().startswith("<svg")
     assert cli.main(["view", str(journal), "--at", "1"]) == 2
     assert "--export" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["view", "run.jsonl", "--port", "http"], "--port: expected a port number, got 'http'"),
+        (["view", "run.jsonl", "--port", "70000"], "expected a port number 0..65535, got '70000'"),
+        (["ros", "srv", "--timeout", "soon"], "--timeout: expected seconds (a number), got 'soon'"),
+        (["export", "r", "--format", "dot", "--at", "-1"], "a number of seconds >= 0, got '-1'"),
+        (["export", "r", "--format", "dot", "--at", "inf"], "a number of seconds >= 0, got 'inf'"),
+        (["export", "r", "--format", "dot", "--event", "2.5"], "a whole number, got '2.5'"),
+        (["export", "r", "--format", "dot", "--event", "-3"], "a number >= 0, got '-3'"),
+    ],
+)
+def test_a_bad_number_is_refused_with_what_was_expected(
+    args: list[str], message: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from smach.introspection import cli
+
+    with pytest.raises(SystemExit) as stop:
+        cli.main(args)
+    assert stop.value.code == 2
+    assert message in capsys.readouterr().err
+
+
+def test_view_on_a_port_in_use_exits_2_and_says_where(
+    journal: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import socket
+
+    from smach.introspection import cli
+
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        assert cli.main(["view", str(journal), "--port", str(port)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"smach-viewer: error: cannot listen on 127.0.0.1:{port}: ")
+    assert err.count("\n") == 1

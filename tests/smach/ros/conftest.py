@@ -19,9 +19,11 @@ from typing import Any
 
 import pytest
 
+from smach.ros.dds import profile_environment
+
 try:
     from smach.ros import _api
-    from smach.ros.executor import SmachExecutor
+    from smach.ros.executor import SmachExecutor, wait_for_callbacks
 except ImportError:  # no ros extra: each test module skips itself (importorskip)
     _api = None
 
@@ -46,6 +48,8 @@ class Ros:
         self._nodes: list[Any] = []
         self._executors: list[tuple[Any, threading.Thread]] = []
         self._processes: list[subprocess.Popen[str]] = []
+        #: Set when the test ends: in-process servers end their running goals.
+        self.closing = threading.Event()
 
     def node(self, name: str, *, spin: bool = False) -> Any:
         """A node in this test's context; ``spin=True`` spins it in a thread."""
@@ -77,7 +81,9 @@ class Ros:
 
     def server(self, *args: str, ready_timeout: float = 20.0) -> subprocess.Popen[str]:
         """Start ros_servers.py with ``args`` and wait for its ``ready`` line."""
-        env = dict(os.environ, FASTDDS_DEFAULT_PROFILES_FILE=str(SHORT_LEASE))
+        # Fast DDS 2.x (Jazzy) and 3.x (Kilted) read the profile from differently
+        # named variables: the one of the installed version.
+        env = dict(os.environ, **profile_environment(SHORT_LEASE))
         process = subprocess.Popen(
             [sys.executable, str(SERVERS), *args],
             stdout=subprocess.PIPE,
@@ -95,6 +101,7 @@ class Ros:
         return process
 
     def close(self) -> None:
+        self.closing.set()
         for process in self._processes:
             if process.poll() is None:
                 process.send_signal(signal.SIGINT)
@@ -111,7 +118,10 @@ class Ros:
             thread.stop.set()  # type: ignore[attr-defined]
         for executor, thread in self._executors:
             thread.join(5)
-            executor.shutdown(timeout_sec=1)
+            # rclpy's shutdown does not wait for running callbacks: wait here, so that
+            # no node is destroyed under one (InvalidHandle in an executor thread).
+            wait_for_callbacks(executor, 5)
+            executor.shutdown(timeout_sec=0)
         helper = SmachExecutor._instances.get(id(self.context))
         if helper is not None:
             helper.shutdown()

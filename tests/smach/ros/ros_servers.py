@@ -39,7 +39,9 @@ def say(text: str) -> None:
     print(text, flush=True)
 
 
-def fibonacci(node, name: str, mode: str, step: float) -> object:  # type: ignore[no-untyped-def]
+def fibonacci(node, name: str, mode: str, step: float, stop=None) -> object:  # type: ignore[no-untyped-def]
+    """The Fibonacci server; a goal running when ``stop`` (an Event) is set aborts, so
+    that a test's clean-up never destroys the node under a running goal."""
     from test_msgs.action import Fibonacci
 
     def on_goal(goal):  # type: ignore[no-untyped-def]
@@ -54,6 +56,9 @@ def fibonacci(node, name: str, mode: str, step: float) -> object:  # type: ignor
         order = handle.request.order
         sequence = [0, 1]
         for i in range(1, max(order, 1)):
+            if stop is not None and stop.is_set():
+                handle.abort()
+                return Fibonacci.Result(sequence=sequence)
             if handle.is_cancel_requested:
                 if mode == "slow-cancel":
                     time.sleep(0.7)

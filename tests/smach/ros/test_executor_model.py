@@ -37,7 +37,7 @@ def machine(node: Any) -> smach.StateMachine:
 
 def servers(ros: Any) -> None:
     node = ros.node("servers")
-    ros_servers.fibonacci(node, "exec_fib", "normal", 0.02)
+    ros_servers.fibonacci(node, "exec_fib", "normal", 0.02, stop=ros.closing)
     ros_servers.setbool(node, "exec_set", "normal")
     ros.spin(node)
 

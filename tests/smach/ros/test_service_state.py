@@ -171,3 +171,41 @@ def test_preempt_during_a_call_returns_preempted_at_once(ros: Any) -> None:
     thread.join(5)
     assert box["outcome"] == "preempted"
     assert time.monotonic() - asked < 0.5
+
+
+@pytest.mark.timeout(30)
+def test_peer_alive_saying_the_server_died_aborts_a_pending_call(ros: Any) -> None:
+    process = ros.server("setbool", "set_slow_peer", "--mode", "slow")
+    lines = read_lines(process)
+    alive = threading.Event()
+    alive.set()
+    state = ServiceState(
+        ros.node("client"),
+        "set_slow_peer",
+        SetBool,
+        call_timeout=25,
+        liveness_period=0.1,
+        peer_alive=alive.is_set,
+    )
+    box: dict[str, Any] = {}
+    thread = threading.Thread(target=lambda: box.update(outcome=state.execute(smach.UserData())))
+    thread.start()
+    assert wait_for(lambda: "request" in lines, 10)
+    alive.clear()  # the caller's own check (a heartbeat, a process) says it is gone
+    thread.join(10)
+    assert box["outcome"] == "aborted"
+
+
+@pytest.mark.timeout(30)
+def test_a_failing_peer_alive_aborts_the_call(ros: Any, caplog: Any) -> None:
+    process = ros.server("setbool", "set_slow_broken", "--mode", "slow")
+    read_lines(process)
+
+    def broken() -> bool:
+        raise OSError("no such process")
+
+    state = ServiceState(
+        ros.node("client"), "set_slow_broken", SetBool, liveness_period=0.1, peer_alive=broken
+    )
+    assert state.execute(smach.UserData()) == "aborted"
+    assert "peer_alive raised OSError: no such process" in caplog.text

@@ -18,6 +18,7 @@ from test_msgs.action import Fibonacci
 import smach
 from smach.ros import SimpleActionState
 from smach.ros._api import GoalStatus, MultiThreadedExecutor, rclpy
+from smach.ros.executor import SmachExecutor
 
 pytestmark = pytest.mark.ros
 
@@ -25,7 +26,7 @@ pytestmark = pytest.mark.ros
 def serve(ros: Any, name: str, mode: str = "normal", step: float = 0.05) -> Any:
     """An in-process Fibonacci server on its own node and executor."""
     node = ros.node(f"server_{name}")
-    server = ros_servers.fibonacci(node, name, mode, step)
+    server = ros_servers.fibonacci(node, name, mode, step, stop=ros.closing)
     ros.spin(node, MultiThreadedExecutor(num_threads=4, context=ros.context))
     return server
 
@@ -323,3 +324,44 @@ def test_state_machine_preempt_reaches_the_action_state(ros: Any) -> None:
     thread.join(10)
     assert box["outcome"] == "preempted"
     assert box["finished"] - asked < 2.0
+
+
+@pytest.mark.timeout(30)
+def test_peer_alive_turning_false_aborts_an_active_goal(ros: Any) -> None:
+    serve(ros, "fib_peer", step=0.5)
+    alive = threading.Event()
+    alive.set()
+    feedback: list[int] = []
+    state = SimpleActionState(
+        ros.node("client"),
+        "fib_peer",
+        Fibonacci,
+        goal=Fibonacci.Goal(order=100),
+        liveness_period=0.1,
+        peer_alive=alive.is_set,
+        feedback_cb=lambda ud, fb: feedback.append(len(fb.sequence)),
+    )
+    thread, box = run_in_thread(state)
+    assert wait_for(lambda: bool(feedback), 10)
+    alive.clear()  # e.g. the server's heartbeat stopped; it is still in the ROS graph
+    thread.join(10)
+    assert box["outcome"] == "aborted"
+
+
+def test_peer_alive_must_be_callable(ros: Any) -> None:
+    with pytest.raises(smach.InvalidStateError, match="peer_alive must be callable"):
+        SimpleActionState(ros.node("client"), "fib", Fibonacci, peer_alive=True)  # type: ignore[arg-type]
+
+
+@pytest.mark.timeout(30)
+def test_a_state_whose_node_is_destroyed_while_it_waits_aborts_without_a_thread_error(
+    ros: Any,
+) -> None:
+    node = ros.node("client")
+    state = SimpleActionState(node, "fib_never", Fibonacci, server_wait_timeout=30)
+    thread, box = run_in_thread(state)
+    time.sleep(0.3)
+    # What a program's shutdown does: smach's helper node (the state's client) goes.
+    assert SmachExecutor.for_node(node).shutdown()
+    thread.join(10)
+    assert box["outcome"] == "aborted"

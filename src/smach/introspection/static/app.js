@@ -35,6 +35,19 @@ window.smachViewer = S;
 const $ = (id) => document.getElementById(id);
 const SVGNS = "http://www.w3.org/2000/svg";
 
+// A toolbar button, left of "Fit", that shows or hides a pane (gantt.js, scene.js);
+// hidden until the pane has something to show.
+window.smachPaneButton = (id, text, title, onClick) => {
+  const button = document.createElement("button");
+  button.id = id;
+  button.textContent = text;
+  button.title = title;
+  button.hidden = true;
+  button.onclick = onClick;
+  $("fit").before(button);
+  return button;
+};
+
 async function getJSON(url) {
   const r = await fetch(url, { cache: "no-store" });
   if (!r.ok) throw new Error(`${url}: ${r.status}`);

@@ -82,16 +82,13 @@
       '<span><i class="gsw interrupted"></i>interrupted (run killed, then resumed)</span></div>' +
       '<svg id="gantt-axis"></svg></div><div id="gantt-scroll"><svg id="gantt-chart"></svg></div>';
     document.getElementById("graph-pane").appendChild(pane);
-    const button = document.createElement("button");
-    button.id = "gantt-toggle";
-    button.title = "timeline of the temporal plan: planned vs actual start and end of each action";
-    button.textContent = "Gantt";
-    button.hidden = true;
-    button.onclick = () => toggle(!G.open);
-    const fit = document.getElementById("fit");
-    fit.parentNode.insertBefore(button, fit);
     G.pane = pane;
-    G.button = button;
+    G.button = window.smachPaneButton(
+      "gantt-toggle",
+      "Gantt",
+      "timeline of the temporal plan: planned vs actual start and end of each action",
+      () => toggle(!G.open),
+    );
     window.addEventListener("resize", () => G.open && draw());
   }
 

@@ -21,20 +21,17 @@
       '<div id="scene-box"><img id="scene-img" alt="picture of the world" hidden>' +
       '<p id="scene-empty" class="empty">no picture of the world yet at this moment</p></div>';
     document.getElementById("graph-pane").after(pane);
-    const button = document.createElement("button");
-    button.id = "scene-toggle";
-    button.textContent = "World";
-    button.title = "show or hide the picture of the world beside the machine";
-    button.hidden = true;
-    button.className = "on";
-    button.onclick = () => {
-      W.open = !W.open;
-      if (W.view) render(W.view);
-    };
-    const fit = document.getElementById("fit");
-    fit.parentNode.insertBefore(button, fit);
     W.pane = pane;
-    W.button = button;
+    W.button = window.smachPaneButton(
+      "scene-toggle",
+      "World",
+      "show or hide the picture of the world beside the machine",
+      () => {
+        W.open = !W.open;
+        if (W.view) render(W.view);
+      },
+    );
+    W.button.className = "on";
     W.img = document.getElementById("scene-img");
     W.img.addEventListener("load", () => {
       document.body.dataset.scene = W.img.dataset.n;

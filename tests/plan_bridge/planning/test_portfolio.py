@@ -10,13 +10,13 @@ from typing import Any
 
 import pytest
 
-from plan_bridge.execution.portfolio import (
+from plan_bridge.pddl.task import PlanningTask, load_task
+from plan_bridge.planning.planner import PlanResult, PlanStatus, PlanStep, UPPlanner
+from plan_bridge.planning.portfolio import (
     FAST_DOWNWARD_CONFIGS,
     PlannerPortfolio,
     fast_downward_portfolio,
 )
-from plan_bridge.pddl.task import PlanningTask, load_task
-from plan_bridge.planning.planner import PlanResult, PlanStatus, PlanStep, UPPlanner
 from plan_bridge.planning.worker import WorkerPool
 
 

@@ -1,5 +1,8 @@
 """A portfolio of planners: several configurations race within one deadline.
 
+(The replanner of :mod:`plan_bridge.execution` races Fast Downward configurations
+through it: :class:`~plan_bridge.execution.policy.ReplanPolicy` ``replan_portfolio``.)
+
 Greedy searches can lose themselves from a state where another configuration finds
 a plan at once (on blocks probBLOCKS-14-0, Fast Downward's ``lama-first`` takes 0.55 s
 and ``add-wastar`` 0.17 s, here). A :class:`PlannerPortfolio` runs up to ``parallel``
@@ -12,6 +15,7 @@ others.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 import threading
@@ -19,7 +23,8 @@ import time
 from collections.abc import Iterable, Mapping, Sequence
 
 from plan_bridge.pddl.task import FactLike, PlanningTask
-from plan_bridge.planning.planner import Planner, PlanResult, PlanStatus, UPPlanner
+from plan_bridge.planning.planner import UPPlanner
+from plan_bridge.planning.types import Planner, PlanResult, PlanStatus
 from plan_bridge.planning.worker import WorkerPool
 
 __all__ = ["FAST_DOWNWARD_CONFIGS", "PlannerPortfolio", "fast_downward_portfolio"]
@@ -89,74 +94,21 @@ class PlannerPortfolio:
         if timeout <= 0:
             raise ValueError(f"timeout must be positive, got {timeout!r}")
         started = time.monotonic()
-        deadline = started + timeout
-        state = None if initial_state is None else list(initial_state)
-        goal_atoms = None if goal is None else list(goal)
-        stop = threading.Event()
-        lock = threading.Lock()
-        queue = list(self.members)
-        results: list[PlanResult] = []
-        winner: list[PlanResult] = []
-        errors: list[BaseException] = []
-
-        running = [self.parallel]
-        settled = threading.Event()
-
-        def slot() -> None:
-            try:
-                run_members()
-            finally:
-                with lock:
-                    running[0] -= 1
-                    if running[0] == 0:
-                        settled.set()
-
-        def run_members() -> None:
-            while not stop.is_set():
-                with lock:
-                    if not queue:
-                        return
-                    member = queue.pop(0)
-                    # An equal share of what is left, for this member and the ones
-                    # this slot may still have to run after it.
-                    rounds = 1 + math.ceil(len(queue) / self.parallel)
-                left = deadline - time.monotonic()
-                if left <= 0.05:
-                    return
-                try:
-                    result = self._solve_one(member, task, left / rounds, state, goal_atoms, stop)
-                except BaseException as exc:  # handed to the caller's thread
-                    with lock:
-                        errors.append(exc)
-                    stop.set()
-                    settled.set()
-                    return
-                with lock:
-                    if stop.is_set() and not result.solved:
-                        return  # cancelled because another member won
-                    results.append(result)
-                    if result.solved or result.engine_status == "UNSOLVABLE_PROVEN":
-                        winner.append(result)
-                        stop.set()
-                        settled.set()
-                        return
-
+        race = _Race(
+            self,
+            task,
+            started + timeout,
+            None if initial_state is None else list(initial_state),
+            None if goal is None else list(goal),
+        )
         for i in range(self.parallel):
-            threading.Thread(target=slot, name=f"plan-bridge-portfolio-{i}", daemon=True).start()
-        # Wait for a winner or for every slot to give up; a member that cannot be
-        # cancelled (not a UPPlanner) is left to finish in the background.
-        while not settled.wait(0.05):
-            if cancel is not None and cancel.is_set():
-                stop.set()
-                break
-        stop.set()
-        with lock:
-            results = list(results)
-        if errors:
-            raise errors[0]
+            threading.Thread(
+                target=race.slot, name=f"plan-bridge-portfolio-{i}", daemon=True
+            ).start()
+        results, winner = race.wait(cancel)
         elapsed = time.monotonic() - started
-        if winner:
-            return _with_time(winner[0], elapsed)
+        if winner is not None:
+            return dataclasses.replace(winner, planning_time_s=elapsed)
         return self._no_plan(results, timeout, elapsed, cancel)
 
     @staticmethod
@@ -213,7 +165,89 @@ class PlannerPortfolio:
         )
 
 
-def _with_time(result: PlanResult, elapsed: float) -> PlanResult:
-    import dataclasses
+class _Race:
+    """The members of one :meth:`PlannerPortfolio.solve`, run by ``parallel`` slots."""
 
-    return dataclasses.replace(result, planning_time_s=elapsed)
+    def __init__(
+        self,
+        portfolio: PlannerPortfolio,
+        task: PlanningTask,
+        deadline: float,
+        state: list[FactLike] | None,
+        goal: list[FactLike] | None,
+    ) -> None:
+        self.portfolio = portfolio
+        self.task = task
+        self.deadline = deadline
+        self.state = state
+        self.goal = goal
+        self.stop = threading.Event()
+        self.settled = threading.Event()
+        self.lock = threading.Lock()
+        self.queue = list(portfolio.members)
+        self.results: list[PlanResult] = []
+        self.winner: PlanResult | None = None
+        self.errors: list[BaseException] = []
+        self.running = portfolio.parallel
+
+    def slot(self) -> None:
+        try:
+            self._run_members()
+        finally:
+            with self.lock:
+                self.running -= 1
+                if self.running == 0:
+                    self.settled.set()
+
+    def _next(self) -> tuple[Planner, float] | None:
+        """The next member and its share of the time left (None: nothing left)."""
+        with self.lock:
+            if not self.queue:
+                return None
+            member = self.queue.pop(0)
+            # An equal share of what is left, for this member and the ones this slot
+            # may still have to run after it.
+            rounds = 1 + math.ceil(len(self.queue) / self.portfolio.parallel)
+        left = self.deadline - time.monotonic()
+        return None if left <= 0.05 else (member, left / rounds)
+
+    def _run_members(self) -> None:
+        while not self.stop.is_set():
+            upcoming = self._next()
+            if upcoming is None:
+                return
+            member, budget = upcoming
+            try:
+                result = self.portfolio._solve_one(
+                    member, self.task, budget, self.state, self.goal, self.stop
+                )
+            except BaseException as exc:  # handed to the caller's thread
+                with self.lock:
+                    self.errors.append(exc)
+                self._end()
+                return
+            with self.lock:
+                if self.stop.is_set() and not result.solved:
+                    return  # cancelled because another member won
+                self.results.append(result)
+                if result.solved or result.engine_status == "UNSOLVABLE_PROVEN":
+                    self.winner = result
+            if self.winner is not None:
+                self._end()
+                return
+
+    def _end(self) -> None:
+        self.stop.set()
+        self.settled.set()
+
+    def wait(self, cancel: threading.Event | None) -> tuple[list[PlanResult], PlanResult | None]:
+        """Wait for a winner or for every slot to give up; a member that cannot be
+        cancelled (not a UPPlanner) is left to finish in the background."""
+        while not self.settled.wait(0.05):
+            if cancel is not None and cancel.is_set():
+                break
+        self.stop.set()
+        with self.lock:
+            if self.errors:
+                raise self.errors[0]
+            return list(self.results), self.winner
