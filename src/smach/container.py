@@ -351,7 +351,7 @@ class Container(ContainerEvents, ContainerChecks, ContainerScope, State):
         the local userdata filled in and the compiled tables ready. Run each child
         with :meth:`step_child` (it forwards preemption, gives runtime control its
         say, emits the per-child events and log lines, wraps child errors and checks
-        the outcome); emit ``_emit_transition`` between children if the container
+        the outcome); emit :meth:`report_transition` between children if the container
         has transitions. Return ``None`` only when ``smach.is_shutdown()`` stopped
         the run. (Subclasses written before this hook was public override ``_run``.)
         """

@@ -12,7 +12,7 @@ to watchers. Three audiences, each paid for only when present:
   not go through events: a container with loggers and no listener builds no event.
 
 Every ``_emit_*`` method does both: it sends the event to whoever listens and writes
-the log line if lines are wanted. Callers test :meth:`ContainerEvents._observed`
+the log line if lines are wanted. Callers test :meth:`ContainerEvents.is_observed`
 first, so an unwatched run pays one attribute test per step.
 """
 
@@ -177,12 +177,15 @@ class ContainerEvents:
         )
 
     # -- emitting --------------------------------------------------------------------------
-    def _observed(self) -> bool:
-        """Whether anybody listens to this container's events or reads its log lines."""
+    def is_observed(self) -> bool:
+        """Whether anybody listens to this container's events or reads its log lines
+        (extension API: test it before building an event of your own)."""
         return bool(self._rt.bus.listeners or self._local or self._log_info)
 
-    def _emit(self, event: Event) -> None:
-        """Send one of this container's events to the tree's bus and to local listeners."""
+    def emit_event(self, event: Event) -> None:
+        """Send an event to the tree's listeners and this container's local ones
+        (extension API: a container's own event types, any :class:`smach.events.Event`
+        subclass, reach the journal, the viewer and ``add_listener`` callbacks)."""
         if self._rt.bus.listeners:
             self._rt.bus.emit(event)
         for listener in self._local:
@@ -257,13 +260,19 @@ class ContainerEvents:
         if self._log_info:
             self._log_exited(label, outcome)
 
-    def _emit_transition(
+    def report_transition(
         self, source: str, outcome: str, target: str, thread: str | None = None
     ) -> None:
+        """Report a transition between children (extension API: for containers that
+        have transitions; the SMACH transition callbacks and the log line follow it)."""
         if self._rt.bus.listeners or self._local:
             self._send(Transition, self._path, thread, source, outcome, target)
         if self._log_info:
             self._log_transition(source, outcome, target)
+
+    _emit_transition = report_transition  # (the names before the extension API was public)
+    _emit = emit_event
+    _observed = is_observed
 
     def _emit_terminated(
         self, terminal_states: Sequence[str], outcome: str | None, thread: str | None = None

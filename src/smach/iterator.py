@@ -185,7 +185,7 @@ class Iterator(Container):
             if outcome in breaks or (loops and outcome not in loops):
                 break
             if bus.listeners or self._local:
-                self._emit_transition(label, outcome, label, thread)
+                self.report_transition(label, outcome, label, thread)
         assert outcome is not None
         final = self._final_outcome_map.get(outcome, outcome)
         if preempted and final not in self._outcomes:

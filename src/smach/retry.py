@@ -87,8 +87,8 @@ class Retry(Wrapper):
                     self.service_preempt()
                     outcome = "preempted"
                 break
-            if self._observed():
-                self._emit_transition(label, outcome, label)
+            if self.is_observed():
+                self.report_transition(label, outcome, label)
         return outcome
 
     def _delay(self, attempt: int) -> float:

@@ -74,7 +74,7 @@ def test_loggers_without_listeners_write_lines_and_build_no_event(
     def no_event(*args: object, **kwargs: object) -> None:
         raise AssertionError("an event was built with nobody listening")
 
-    for name in ("_emit_started", "_emit_entered", "_emit_exited", "_emit_transition"):
+    for name in ("_emit_started", "_emit_entered", "_emit_exited", "report_transition"):
         monkeypatch.setattr(Container, name, no_event)
     monkeypatch.setattr(smach.StateMachine, "_emit_step", no_event)
     sm = smach.StateMachine(["done"])

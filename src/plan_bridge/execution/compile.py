@@ -132,14 +132,16 @@ class StepState(smach.Wrapper):
         return added
 
     def consistency_problems(self) -> list[str]:
-        if self._child is None:
-            return [f"{self._path}: the step has no skill"]
+        children = self.get_children()
+        if not children:
+            return [f"{self.path}: the step has no skill"]
         problems = []
-        for outcome in self._child.get_registered_outcomes():
+        ((label, child),) = children.items()
+        for outcome in child.get_registered_outcomes():
             mapped = self.skill.map_outcome(outcome) if self.skill else outcome
             if mapped not in REQUIRED_OUTCOMES:
                 problems.append(
-                    f"{self._path}/{self._label}: skill outcome {outcome!r} is not one of "
+                    f"{self.path}/{label}: skill outcome {outcome!r} is not one of "
                     f"{', '.join(REQUIRED_OUTCOMES)} and is not mapped by the skill's outcome_map"
                 )
         return problems
@@ -165,14 +167,15 @@ class StepState(smach.Wrapper):
         record.outcome = outcome
         return self._finish(record, started)
 
-    def _give_step_keys(self) -> dict[str, Any]:
+    def _give_step_keys(self) -> smach.UserData:
         """Put the step's keys in its userdata for the skill (none of its observations
-        yet); the userdata's values, for a subclass to add its own keys."""
-        data = self._userdata._data
+        yet); the userdata, for a subclass to add its own keys."""
+        data = self.userdata
         data["action"] = self.ground.name
         data["arguments"] = self.ground.arguments
         data["params"] = self.ground.binding
-        data.pop(OBSERVATIONS_KEY, None)
+        if OBSERVATIONS_KEY in data:
+            del data[OBSERVATIONS_KEY]
         return data
 
     def _skill_result(
@@ -182,10 +185,15 @@ class StepState(smach.Wrapper):
         and what the skill observed (taken out of the userdata)."""
         record.skill_outcome = skill_outcome
         outcome = self.skill.map_outcome(skill_outcome) if self.skill else skill_outcome
+        data = self.userdata
+        raw = None
+        if OBSERVATIONS_KEY in data:
+            raw = data[OBSERVATIONS_KEY]
+            del data[OBSERVATIONS_KEY]
         try:
-            observations = normalise_observations(self._userdata._data.pop(OBSERVATIONS_KEY, None))
+            observations = normalise_observations(raw)
         except ValueError as exc:
-            raise smach.InvalidUserCodeError(f"skill {self._path}/{label}: {exc}") from exc
+            raise smach.InvalidUserCodeError(f"skill {self.path}/{label}: {exc}") from exc
         return outcome, observations
 
     def _adopted(self, observations: Sequence[Observation]) -> None:
@@ -208,9 +216,9 @@ class StepState(smach.Wrapper):
     def _announce(self, kind: Callable[..., Event], **fields: Any) -> None:
         """Emit this step's event ``kind`` with ``fields`` (its path, the time and the
         thread filled in), if anybody listens."""
-        if self._bus.listeners:
+        if self.is_observed():
             t, thread = stamp()
-            self._bus.emit(kind(path=self._path, time=t, thread=thread, **fields))
+            self.emit_event(kind(path=self.path, time=t, thread=thread, **fields))
 
     def _finish(self, record: StepRecord, started: float) -> str:
         record.duration_s = time.monotonic() - started

@@ -149,8 +149,8 @@ class Executive(PlanContainer):
         self._compiled: CompiledPlan | None = None
         self._replanner: Replanner | None = None
         self._recovery: Recovery | None = None
-        self._running = False
         self._records: dict[int, StepRecord] = {}
+        self._in_mission = False  # between the start and the end of run_children
         #: The knowledge base the mission follows (None: the task's problem).
         self.knowledge: KnowledgeBase | None = None
         self._link: KnowledgeLink | None = None
@@ -165,7 +165,7 @@ class Executive(PlanContainer):
         return ["PLAN"] if self._compiled is not None else []
 
     def get_active_states(self) -> list[str]:
-        return ["PLAN"] if self._running and self._compiled is not None else []
+        return ["PLAN"] if self._in_mission and self._compiled is not None else []
 
     def get_internal_edges(self) -> list[tuple[str, str, str | None]]:
         if self._compiled is None:
@@ -185,13 +185,10 @@ class Executive(PlanContainer):
                 f"executive {self.path}: skills do not fit the domain:\n  " + "\n  ".join(problems)
             )
 
-    def is_running(self) -> bool:
-        return self._running
-
     def request_preempt(self) -> None:
         super().request_preempt()
         compiled = self._compiled
-        if self._running and compiled is not None:
+        if self.is_running() and compiled is not None:
             compiled.machine.request_preempt()
 
     # -- execution -------------------------------------------------------------------------
@@ -203,11 +200,17 @@ class Executive(PlanContainer):
         """
         started = time.monotonic()
         self.report = report = ExecutionReport()
+        # The next step label, and the succeeded steps in plan order.
+        self._next_label = 1
+        self._executed = []
+        self._in_mission = True
         try:
             outcome = self._mission()
             report.explanation = report.explanation or "goal reached"
         except MissionEnded as stop:
             outcome, report.explanation = stop.outcome, stop.explanation
+        finally:
+            self._in_mission = False
         report.outcome = outcome
         report.goal_reached = self.model.goal_holds(self.belief.facts)
         report.total_time_s = time.monotonic() - started
@@ -334,7 +337,7 @@ class Executive(PlanContainer):
         self._records = {}
         self._plan_in_force, self._first_in_force = plan, first_index
         self.report.final_plan = [str(s) for s in plan]
-        if self._preempt_requested or self._knowledge_pending():
+        if self.preempt_requested() or self._knowledge_pending():
             compiled.machine.request_preempt()
         ud = smach.Remapper(
             self.userdata,
@@ -344,7 +347,7 @@ class Executive(PlanContainer):
             writer="PLAN",
         )
         outcome = compiled.machine.execute(ud)
-        if outcome == "preempted" or self._preempt_requested:
+        if outcome == "preempted" or self.preempt_requested():
             return "preempted", None
         if outcome == "succeeded":
             return "succeeded", None
@@ -449,7 +452,7 @@ class Executive(PlanContainer):
         or goal stops the plan in force and replans; an operator's new goal goes into it."""
         from plan_bridge.execution.knowledge_link import KnowledgeLink
 
-        if self._running:
+        if self.is_running():
             raise RuntimeError(f"executive {self.path}: attach a knowledge base before the run")
         self.detach_knowledge()
         self._link = KnowledgeLink(knowledge, self.belief, self.task, self._knowledge_changed)
@@ -462,7 +465,7 @@ class Executive(PlanContainer):
         self._link, self.knowledge = None, None
 
     def _knowledge_changed(self) -> None:
-        if self._running:
+        if self.is_running():
             self.stop_plan()
 
     def _take_knowledge(self) -> str:
@@ -610,9 +613,9 @@ class Executive(PlanContainer):
     def _announce(self, kind: Callable[..., Event], **fields: Any) -> None:
         """Emit the executive's event ``kind`` with ``fields`` (its path, the time and
         the thread filled in), if anybody listens."""
-        if self._observed():
+        if self.is_observed():
             t, thread = stamp()
-            self._emit(kind(path=self._path, time=t, thread=thread, **fields))
+            self.emit_event(kind(path=self.path, time=t, thread=thread, **fields))
 
     # -- belief --------------------------------------------------------------------------------
     def _sense(self, unobserved: Sequence[PlanStep] = ()) -> None:
@@ -630,18 +633,12 @@ class Executive(PlanContainer):
         self.belief.observe(observations)
 
     def _check_preempt(self) -> None:
-        if self._preempt_requested:
+        if self.preempt_requested():
             raise MissionEnded("preempted", "preempted")
 
     def decide(self, decision: str, reason: str, step: str = "") -> None:
         self.report.decisions.append({"decision": decision, "reason": reason, "step": step})
         self._announce(ExecutiveDecision, decision=decision, reason=reason, step=step)
-
-    def _begin(self, parent_ud: smach.UserData | None) -> None:
-        super()._begin(parent_ud)
-        # The next step label, and the succeeded steps in plan order.
-        self._next_label = 1
-        self._executed = []
 
 
 def _json_values(ud: smach.UserData) -> dict[str, Any]:

@@ -333,7 +333,7 @@ class TemporalDispatch(PlanContainer):
             raise run.errors[0]
         if run.failure is not None:
             return run.failure
-        if self._preempt_requested or run.waiting:
+        if self.preempt_requested() or run.waiting:
             return "preempted"
         return "succeeded"
 
@@ -343,7 +343,7 @@ class TemporalDispatch(PlanContainer):
             try:
                 while not (
                     run.failure is not None
-                    or self._preempt_requested
+                    or self.preempt_requested()
                     or run.errors
                     or i in run.released
                 ):
@@ -372,7 +372,7 @@ class TemporalDispatch(PlanContainer):
     def _loop(self, run: _Dispatch) -> None:
         with self._wake:
             while True:
-                stopping = run.failure is not None or self._preempt_requested or run.errors
+                stopping = run.failure is not None or self.preempt_requested() or run.errors
                 due: float | None = None
                 if not stopping:
                     due = self._start_ready(run)
