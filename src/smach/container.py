@@ -297,7 +297,9 @@ class Container(ContainerEvents, ContainerChecks, ContainerScope, State):
         1. compile, if anything changed since the last run (``_prepare``: the tree is
            checked once, the run tables are built);
         2. refuse a second run while one is going on;
-        3. ``_begin``: copy input keys in, decide who listens this run;
+        3. copy input keys in, decide who listens this run (what ``_begin`` does, inline:
+           a method call per container counts in deep trees; overriding ``_begin``
+           changes only containers that write their own ``execute``);
         4. ``container_started``; then the container's own loop, ``run_children()``;
         5. the outcome checked against the declared ones; ``container_terminated``;
            output keys copied out (all skipped when ``run_children`` returned ``None``
@@ -312,8 +314,15 @@ class Container(ContainerEvents, ContainerChecks, ContainerScope, State):
             raise InvalidStateError(f"{self._path} is already running (in another thread?)")
         self._running = True
         try:
-            self._begin(parent_ud)
-            bus = self._rt.bus
+            # What _begin does (for containers that write their own execute), inlined:
+            # one call less per container counts in deep trees.
+            if parent_ud is not None and self._copies_in:
+                self._copy_input_keys(parent_ud)
+            rt = self._rt
+            if self._parent is None:
+                rt.log_info = info_enabled()
+            self._log_info = rt.log_info
+            bus = rt.bus
             if bus.listeners or self._local:
                 self._thread = _current_thread().name
                 self._emit_started(self._start_states(), self._thread)
@@ -421,7 +430,9 @@ class Container(ContainerEvents, ContainerChecks, ContainerScope, State):
 
     # -- running helpers (also for containers that write their own execute) ------------
     def _begin(self, parent_ud: UserData | None) -> None:
-        """Start a run: copy input keys in, decide whether log lines are wanted.
+        """Start a run: copy input keys in, decide whether log lines are wanted (for a
+        container that writes its own ``execute``; ``Container.execute`` does the same
+        inline).
 
         Whether INFO lines are wanted is decided once per top-level run (it costs a
         logging lookup) and shared through the tree's runtime context (``Runtime``)
