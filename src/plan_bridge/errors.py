@@ -150,7 +150,9 @@ class PlannerNotFoundError(PlanBridgeError, LookupError):
         self.name = name
         self.installed = tuple(installed)
         super().__init__(
-            f"unknown planner {name!r}; installed planners: {', '.join(self.installed) or 'none'}"
+            f"unknown planner {name!r}; use auto (the default choice by problem kind), "
+            f"warm-gbfs (the in-worker search), or an installed engine: "
+            f"{', '.join(self.installed) or 'none'}"
         )
 
     def __reduce__(self) -> tuple[object, ...]:

@@ -150,6 +150,7 @@ def test_unknown_planner_is_a_bad_input_error(
     assert main(["plan", str(domain), str(problem), "--planner", "nope"]) == 2
     err = capsys.readouterr().err
     assert "unknown planner 'nope'" in err and "fast-downward" in err
+    assert "use auto" in err and "warm-gbfs" in err  # the names that are not engines too
 
 
 @pytest.mark.parametrize("value", ["0", "-1", "soon", "nan"])
