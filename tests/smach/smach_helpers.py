@@ -135,3 +135,28 @@ class LogRecorder:
 
     def install(self) -> None:
         smach.set_loggers(self.info.append, self.warn.append, self.debug.append, self.error.append)
+
+
+class Runner:
+    """Runs ``root.execute(ud)`` in a thread; ``result()`` joins with a timeout and
+    re-raises what the run raised."""
+
+    def __init__(self, root: smach.State, ud: smach.UserData | None = None) -> None:
+        self.outcome: list[str | None] = []
+        self.errors: list[BaseException] = []
+
+        def run() -> None:
+            try:
+                self.outcome.append(root.execute(ud))  # type: ignore[arg-type]
+            except BaseException as exc:
+                self.errors.append(exc)
+
+        self.thread = threading.Thread(target=run, name="runner", daemon=True)
+        self.thread.start()
+
+    def result(self, timeout: float = 10.0) -> str | None:
+        self.thread.join(timeout)
+        assert not self.thread.is_alive(), "the run did not finish"
+        if self.errors:
+            raise self.errors[0]
+        return self.outcome[0]

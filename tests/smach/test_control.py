@@ -8,36 +8,13 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+from smach_helpers import Runner
 
 import smach
 from smach.control import ControlError, Controller
 from smach.testing import BlockingState, EventRecorder, ScriptedState
 
 pytestmark = pytest.mark.timeout(60)
-
-
-class Runner:
-    """Runs ``root.execute()`` in a thread; ``result()`` joins with a timeout."""
-
-    def __init__(self, root: smach.State) -> None:
-        self.outcome: list[str | None] = []
-        self.errors: list[BaseException] = []
-
-        def run() -> None:
-            try:
-                self.outcome.append(root.execute(None))  # type: ignore[arg-type]
-            except BaseException as exc:
-                self.errors.append(exc)
-
-        self.thread = threading.Thread(target=run, name="runner", daemon=True)
-        self.thread.start()
-
-    def result(self, timeout: float = 10.0) -> str | None:
-        self.thread.join(timeout)
-        assert not self.thread.is_alive(), "the run did not finish"
-        if self.errors:
-            raise self.errors[0]
-        return self.outcome[0]
 
 
 def _chain(*labels: str) -> tuple[smach.StateMachine, dict[str, ScriptedState]]:

@@ -3,10 +3,10 @@ gets the run protocol and runtime control: pause, breakpoints and forced outcome
 
 from __future__ import annotations
 
-import threading
 from collections.abc import Mapping, Sequence
 
 import pytest
+from smach_helpers import Runner
 
 import smach
 from smach.container import construction_method
@@ -75,30 +75,6 @@ class Fallback(smach.Container):
             if result == self._success:
                 return self._success
         return self._failure
-
-
-class Runner:
-    """Runs ``root.execute()`` in a thread; ``result()`` joins with a timeout."""
-
-    def __init__(self, root: smach.State) -> None:
-        self.outcome: list[str | None] = []
-        self.errors: list[BaseException] = []
-
-        def run() -> None:
-            try:
-                self.outcome.append(root.execute(smach.UserData()))
-            except BaseException as exc:
-                self.errors.append(exc)
-
-        self.thread = threading.Thread(target=run, name="runner", daemon=True)
-        self.thread.start()
-
-    def result(self, timeout: float = 10.0) -> str | None:
-        self.thread.join(timeout)
-        assert not self.thread.is_alive(), "the run did not finish"
-        if self.errors:
-            raise self.errors[0]
-        return self.outcome[0]
 
 
 def _mission(*children: tuple[str, smach.State]) -> tuple[smach.StateMachine, Fallback]:
