@@ -15,11 +15,19 @@ __all__ = [
     "InvalidStateError",
     "InvalidTransitionError",
     "InvalidUserCodeError",
+    "MissingExtraError",
     "NoContainerOpenError",
     "SmachError",
     "UndeclaredKeyError",
     "UserDataKeyError",
 ]
+
+
+class MissingExtraError(ModuleNotFoundError):
+    """An optional part of smach-planner whose packages are not installed (an extra
+    such as ``ros``); the message names what is missing and the pip command. A
+    ``ModuleNotFoundError``, so ``pytest.importorskip`` and code probing for the
+    extra treat it as the missing module it is."""
 
 
 class SmachError(Exception):

@@ -20,7 +20,8 @@ from collections.abc import Iterator, Sequence
 from contextlib import contextmanager, suppress
 from types import FrameType
 
-from plan_bridge.cli.base import EXIT_INTERNAL, Command, Terminated
+from plan_bridge.cli.base import EXIT_BAD_INPUT, EXIT_INTERNAL, Command, Terminated
+from smach.exceptions import MissingExtraError
 
 __all__ = ["MODULES", "Terminated", "build_parser", "commands", "main"]
 
@@ -124,6 +125,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("plan-bridge: interrupted", file=sys.stderr)
         return 130
+    except MissingExtraError as exc:  # e.g. --ros without the ros extra
+        print(f"plan-bridge: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     except Exception as exc:
         # A bug of ours or of a domain's code: say what and where, not a traceback
         # (set PLAN_BRIDGE_DEBUG=1 to get one).

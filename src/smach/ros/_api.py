@@ -18,6 +18,8 @@ import threading
 import warnings
 from typing import Any
 
+from smach.exceptions import MissingExtraError
+
 __all__ = [
     "ActionClient",
     "ActionServer",
@@ -41,7 +43,7 @@ def _load(name: str) -> Any:
     except ImportError as exc:
         # ModuleNotFoundError: what is missing is a package (pytest.importorskip and
         # callers checking for an optional extra expect this type).
-        raise ModuleNotFoundError(
+        raise MissingExtraError(
             f"smach.ros needs rclpy and the ROS 2 message packages ({name} is missing); "
             'install them with: pip install "smach-planner[ros]"'
         ) from exc

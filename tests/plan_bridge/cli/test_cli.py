@@ -12,6 +12,8 @@ import pytest
 
 from plan_bridge.cli import commands, main
 
+DOMAINS = Path(__file__).resolve().parents[3] / "domains"
+
 SCRIPT = Path(sys.executable).with_name("plan-bridge")
 
 
@@ -164,3 +166,19 @@ def test_bad_timeout_is_a_usage_error(
         main(["plan", str(domain), str(problem), "--timeout", value])
     assert caught.value.code == 2
     assert "--timeout" in capsys.readouterr().err
+
+
+@pytest.mark.timeout(120)
+def test_run_with_ros_but_without_rclpy_says_which_extra_to_install() -> None:
+    # A process in which rclpy cannot be imported (as without the ros extra).
+    code = (
+        "import sys; sys.modules['rclpy'] = None\n"
+        "from plan_bridge.cli import main\n"
+        f"sys.exit(main(['run', {str(DOMAINS / 'fetch_drink')!r}, '--ros', '--quiet']))\n"
+    )
+    proc = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=100, check=False
+    )
+    assert proc.returncode == 2, proc.stderr
+    assert 'pip install "smach-planner[ros]"' in proc.stderr
+    assert "internal error" not in proc.stderr and "Traceback" not in proc.stderr
