@@ -37,6 +37,12 @@ __all__ = ["StateMachine"]
 _monotonic = time.monotonic
 _current_thread = threading.current_thread
 
+# The text of a userdata's key list in the "starting" INFO line, by the keys: a
+# program has few key sets, so formatting each once saves most of the line's cost
+# when a logger is installed (bounded, in case keys are made up at run time).
+_KEY_LISTS: dict[tuple[str, ...], str] = {}
+_KEY_LISTS_MAX = 1024
+
 
 class _Slot:
     """A compiled child: everything one step of the loop needs."""
@@ -504,9 +510,15 @@ class StateMachine(Container):
         ]
 
     def _log_started(self) -> None:
+        keys = tuple(self._userdata._data)
+        shown = _KEY_LISTS.get(keys)
+        if shown is None:  # (the list's text costs more than the rest of the line)
+            shown = str([*keys])
+            if len(_KEY_LISTS) < _KEY_LISTS_MAX:
+                _KEY_LISTS[keys] = shown
         smach.loginfo(
             f"State machine starting in initial state '{self._initial_state_label}' with "
-            f"userdata: \n\t{[*self._userdata._data]}"
+            f"userdata: \n\t{shown}"
         )
 
     def _log_transition(self, source: str, outcome: str, target: str) -> None:

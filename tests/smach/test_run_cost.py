@@ -142,3 +142,20 @@ def test_a_logger_whose_level_admits_info_or_cannot_tell_gets_the_lines() -> Non
     finally:
         smach.log.restore_default_loggers()
     assert sum(line.startswith("State machine starting") for line in chatty.lines) == 2
+
+
+def test_the_starting_line_names_the_userdata_keys_of_each_run() -> None:
+    sm = smach.StateMachine(["done"], input_keys=["a"])
+    with sm:
+        smach.StateMachine.add("ONLY", Leaf(["done"]), {"done": "done"})
+    lines: list[str] = []
+    smach.set_loggers(lines.append, lines.append, lines.append, lines.append)
+    try:
+        for keys in (["a"], ["a"], ["a", "b"], []):
+            sm.userdata = smach.UserData({k: 1 for k in keys})
+            assert sm.execute() == "done"
+    finally:
+        smach.log.restore_default_loggers()
+    starts = [line for line in lines if line.startswith("State machine starting")]
+    shown = [line.rsplit("\t", 1)[1] for line in starts]
+    assert shown == ["['a']", "['a']", "['a', 'b']", "[]"]
