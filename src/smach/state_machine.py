@@ -525,6 +525,5 @@ class StateMachine(Container):
         smach.loginfo(f"State machine transitioning '{source}':'{outcome}'-->'{target}'")
 
     def _log_terminated(self, outcome: str | None) -> None:
-        smach.loginfo(
-            f"State machine terminating '{self._last_exit[0]}':'{self._last_exit[1]}':'{outcome}'"
-        )
+        label, last = self._last_exit
+        smach.loginfo(f"State machine terminating '{label}':'{last}':'{outcome}'")
