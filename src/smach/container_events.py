@@ -270,9 +270,7 @@ class ContainerEvents:
         if self._log_info:
             self._log_transition(source, outcome, target)
 
-    _emit_transition = report_transition  # (the names before the extension API was public)
-    _emit = emit_event
-    _observed = is_observed
+    _emit_transition = report_transition  # (its name before the extension API was public)
 
     def _emit_terminated(
         self, terminal_states: Sequence[str], outcome: str | None, thread: str | None = None

@@ -85,6 +85,17 @@ def decisions(executive: Executive, kind: str) -> list[str]:
     return [d["reason"] for d in executive.report.decisions if d["decision"] == kind]
 
 
+def gated_mission() -> tuple[Gate, SimulatedWorld, KnowledgeBase, Executive]:
+    """The rooms mission on a simulated world, following a knowledge base, its skills
+    held at the first pick (``gate``)."""
+    task = rooms()
+    gate = Gate("pick")
+    world, skills = simulated(task, gate)
+    kb = KnowledgeBase.from_task(task)
+    executive = Executive(task, skills, get_planner("fast-downward"), world=world, knowledge=kb)
+    return gate, world, kb, executive
+
+
 def test_the_belief_holds_the_knowledge_bases_facts() -> None:
     task = rooms()
     kb = KnowledgeBase.from_task(task)
@@ -105,11 +116,7 @@ def test_the_belief_holds_the_knowledge_bases_facts() -> None:
 
 
 def test_a_goal_added_while_the_mission_runs_stops_the_plan_and_is_planned_for() -> None:
-    task = rooms()
-    gate = Gate("pick")
-    world, skills = simulated(task, gate)
-    kb = KnowledgeBase.from_task(task)
-    executive = Executive(task, skills, get_planner("fast-downward"), world=world, knowledge=kb)
+    gate, world, kb, executive = gated_mission()
     runner, result = run(executive)
     assert gate.holding.wait(60)
     kb.add_goal("(at robot1 kitchen)", source="test")
@@ -123,11 +130,7 @@ def test_a_goal_added_while_the_mission_runs_stops_the_plan_and_is_planned_for()
 
 
 def test_a_fact_asserted_while_the_mission_runs_is_believed_without_a_replan() -> None:
-    task = rooms()
-    gate = Gate("pick")
-    world, skills = simulated(task, gate)
-    kb = KnowledgeBase.from_task(task)
-    executive = Executive(task, skills, get_planner("fast-downward"), world=world, knowledge=kb)
+    gate, _world, kb, executive = gated_mission()
     runner, result = run(executive)
     assert gate.holding.wait(60)
     kb.add_fact("(lights-on office)", source="operator")
@@ -162,11 +165,7 @@ def test_an_instance_and_a_goal_naming_it_are_planned_for_mid_mission() -> None:
 
 
 def test_an_operators_new_goal_goes_into_the_knowledge_base() -> None:
-    task = rooms()
-    gate = Gate("pick")
-    world, skills = simulated(task, gate)
-    kb = KnowledgeBase.from_task(task)
-    executive = Executive(task, skills, get_planner("fast-downward"), world=world, knowledge=kb)
+    gate, world, kb, executive = gated_mission()
     control = MissionControl(executive)
     runner, result = run(executive)
     assert gate.holding.wait(60)
