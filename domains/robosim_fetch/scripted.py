@@ -55,7 +55,7 @@ def _fetch_goal(task: PlanningTask, world: RobosimWorld) -> tuple[str, str, str]
         if f[0] != "handempty" and not (f[0] == "at" and world.name(f[1]) in model.items)
     ]
     spawn = wanted[0][1] if len(wanted) == 1 else ""
-    if others or spawn not in model.spots or model.spots[spawn].kind != "spawn":
+    if others or spawn not in model.places or not model.places[spawn].is_spawn:
         raise ValueError(
             "the scripted baseline of robosim_fetch fetches one object to a spawn: a goal "
             f"(At OBJECT SPAWN), optionally with (HandEmpty {robot}); not {task.goal_facts}"

@@ -59,15 +59,15 @@ class _Plan:
         for fact in task.goal_facts:
             name, args = fact[0], [world.name(a) for a in fact[1:]]
             if name == "has" and args[0] in model.gates and args[1] in model.items:
-                spawns = model.gates[args[0]].spawns
-                if model.items[args[1]] not in spawns:
-                    self.deliveries.append((args[1], spawns[0]))
-            elif name == "at" and args[0] in model.items and args[1] in model.spots:
-                if model.items[args[0]] != args[1]:
+                places = model.spawn_places(args[0])
+                if model.item_place(args[1]) not in places:
+                    self.deliveries.append((args[1], places[0]))
+            elif name == "at" and args[0] in model.items and args[1] in model.places:
+                if model.item_place(args[0]) != args[1]:
                     self.deliveries.append((args[0], args[1]))
             elif name == "searched":
                 self.searches.append(args[0])
-            elif name == "at" and args[0] == self.robot and args[1] in model.spots:
+            elif name == "at" and args[0] == self.robot and args[1] in model.places:
                 self.end_at = args[1]
             elif name != "handempty":
                 raise ValueError(
@@ -87,7 +87,7 @@ def _nearest_first(world: RobosimWorld, start: str, spots: list[str]) -> list[st
 
 
 def _search(world: RobosimWorld, robot: str, spawn: str, charger: str | None) -> smach.StateMachine:
-    location = world.model.spots[spawn].gate or ""
+    location = world.model.places[spawn].fixture or ""
     sm = smach.StateMachine(outcomes=_PART, input_keys=KEYS, output_keys=KEYS)
     with sm:
         smach.StateMachine.add(
@@ -121,7 +121,7 @@ def scripted(
     model = world.model
     plan = _Plan(task, world)
     robot, charger = plan.robot, charger_spot(world)
-    start = next(r.spot for r in model.robots if r.name == robot)
+    start = next(r.place for r in model.robots if r.name == robot)
     after_deliveries = plan.deliveries[-1][1] if plan.deliveries else start
     parts: list[tuple[str, smach.StateMachine]] = [
         (f"DELIVER_{item.upper()}", deliver(world, robot, item, target, charger))

@@ -80,8 +80,8 @@ def _deliveries(task: PlanningTask, world: RobosimWorld) -> list[Delivery]:
     for fact in task.goal_facts:
         if fact[0] == "at" and world.name(fact[1]) in model.items:
             item, target = world.name(fact[1]), world.name(fact[2])
-            source = model.items[item]
-            if target not in model.spots or model.spots[target].kind != "spawn":
+            source = model.item_place(item)
+            if target not in model.places or not model.places[target].is_spawn:
                 others.append(fact)
             elif source is None:
                 raise ValueError(f"{item} is held at the start: the baseline fetches from spawns")
@@ -98,13 +98,13 @@ def _deliveries(task: PlanningTask, world: RobosimWorld) -> list[Delivery]:
 
 
 def _closed(world: RobosimWorld, spawn: str) -> bool:
-    gate = world.model.spots[spawn].gate
+    gate = world.model.places[spawn].fixture
     return gate is not None and not world.model.gates[gate].is_open
 
 
 def _metres(world: RobosimWorld, start: str, stops: list[str]) -> float:
     """Metres of the shortest ways from ``start`` through ``stops`` in order."""
-    blocked = [h for h in world.model.hall_ends if world.model.gates[h].is_locked]
+    blocked = [h for h in world.model.halls if world.model.gates[h].is_locked]
     here, total = start, 0.0
     for stop in stops:
         total += route_length(world, route(world, here, stop, blocked))
@@ -152,7 +152,7 @@ class WaitOpen(smach.State):
     def __init__(self, world: RobosimWorld, spawn: str, patience: float = PATIENCE_S) -> None:
         super().__init__(outcomes=["open", "closed", "preempted"])
         self.world, self.patience = world, patience
-        self.gate = world.model.spots[spawn].gate or ""
+        self.gate = world.model.places[spawn].fixture or ""
 
     def execute(self, ud: smach.UserData) -> str:
         if not self.gate:
@@ -178,14 +178,15 @@ def _robot_machine(
     model = world.model
     stages: list[tuple[str, smach.State, dict[str, str]]] = []
     for spawn in jobs.opens:
-        gate = model.spots[spawn].gate or ""
+        gate = model.places[spawn].fixture or ""
         name = gate.upper()
         stages.append((f"GO_TO_{name}", go_to(world, robot, spawn, charger), {}))
         stages.append((f"OPEN_{name}", Act(world, robot, "open", gate, spawn), {}))
     for delivery in jobs.deliveries:
         item, source, target = delivery.item, delivery.source, delivery.target
         name = item.upper()
-        location, target_location = model.spots[source].gate or "", model.spots[target].gate or ""
+        location = model.places[source].fixture or ""
+        target_location = model.places[target].fixture or ""
         stages += [
             (f"GO_TO_{name}", go_to(world, robot, source, charger), {}),
             (f"OPEN_FOR_{name}", Act(world, robot, "open", location, source), {}),

@@ -103,8 +103,14 @@ def task_with_goal(task: PlanningTask, goal: Iterable[FactLike]) -> PlanningTask
             if head == ":goal":
                 text = source.text[:start] + f"(:goal (and {body}))" + source.text[end:]
                 break
+    spec = None if task.spec is None else task.spec.with_state(goal=atoms)
     return dataclasses.replace(
-        task, problem=problem, goal_facts=atoms, goal_is_conjunctive=True, problem_text=text
+        task,
+        problem=problem,
+        goal_facts=atoms,
+        goal_is_conjunctive=True,
+        problem_text=text,
+        spec=spec,
     )
 
 

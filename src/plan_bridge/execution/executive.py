@@ -38,6 +38,7 @@ from plan_bridge.execution.policy import ExecutionReport, ReplanPolicy
 from plan_bridge.execution.repair import Recovery, RecoveryStrategy, default_ladder
 from plan_bridge.execution.replanner import MissionEnded, Replanner
 from plan_bridge.execution.semantics import ActionModel
+from plan_bridge.execution.task_view import TaskView, adopt_map_atoms
 from plan_bridge.execution.temporal import TemporalDispatch
 from plan_bridge.execution.world import (
     Observation,
@@ -108,6 +109,7 @@ class Executive(PlanContainer):
         plan_cache: PlanCache | None = None,
         knowledge: KnowledgeBase | None = None,
         recovery_ladder: Sequence[RecoveryStrategy] | None = None,
+        task_view: TaskView | None = None,
     ) -> None:
         super().__init__(list(OUTCOMES), input_keys, output_keys)
         #: Called (from the step's thread) after every succeeded step with the state
@@ -130,11 +132,15 @@ class Executive(PlanContainer):
             default_ladder() if recovery_ladder is None else list(recovery_ladder)
         )
         self.model = ActionModel(task)
-        self.belief = (
-            belief
-            if belief is not None
-            else WorldState(task.initial_facts, self.model.initial_values())
-        )
+        #: Makes the task to plan from the belief (a world with a map: execution/task_view.py).
+        self.task_view = task_view
+        if belief is not None:
+            self.belief = belief
+        elif task_view is not None:
+            self.belief = WorldState(task_view.belief())
+            adopt_map_atoms(task_view, self.belief, task, self.model.initial_values())
+        else:
+            self.belief = WorldState(task.initial_facts, self.model.initial_values())
         #: Temporal plans: wall seconds per plan second (0: start steps on events only)
         #: and what happens to running steps when one fails (``finish`` or ``preempt``).
         self.time_scale = 0.0
@@ -247,6 +253,7 @@ class Executive(PlanContainer):
                 self.plan_cache,
                 self.preempt_event,
                 self._plan_computed,
+                projected=self.task_view is not None,
             )
         replanner.start(self.report)
         recovery = self._recovery = Recovery(
@@ -263,6 +270,7 @@ class Executive(PlanContainer):
         if self.model.goal_holds(self.belief.facts):
             self.decide("done", "the goal already holds")
             return "succeeded"
+        self._retask()
         if resume is None:
             initial = replanner.plan("initial plan")
             if not initial.solved:
@@ -311,6 +319,7 @@ class Executive(PlanContainer):
                     for i, step in enumerate(plan)
                     if i != failed and not self._succeeded(first + i)
                 ]
+            self._retask()
             plan = recovery.recover(rest, reason, record)
 
     def _run_plan(self, plan: list[PlanStep], first_index: int) -> tuple[str, int | None]:
@@ -435,6 +444,7 @@ class Executive(PlanContainer):
             self.decide("knowledge", reason)
         if task is not None:
             self._use_task(task)
+        self._retask()
         if self.model.goal_holds(self.belief.facts):
             raise MissionEnded("succeeded", f"{reason}; the goal holds")
         result = replanner.plan(reason, replan=True)
@@ -480,6 +490,21 @@ class Executive(PlanContainer):
 
     def _knowledge_pending(self) -> bool:
         return self._link is not None and self._link.changed
+
+    def _retask(self) -> None:
+        """With a task view: plan the task it makes of the belief now (its map atoms
+        go into the belief when it is another task)."""
+        view = self.task_view
+        if view is None:
+            return
+        try:
+            task = view.task_for(self.belief.facts, self.task.goal_facts)
+        except PlanBridgeError as exc:
+            raise MissionEnded("aborted", f"no task for the belief: {exc}") from exc
+        if task is self.task:
+            return
+        self._use_task(task)
+        adopt_map_atoms(view, self.belief, task, self.model.initial_values())
 
     def _use_task(self, task: PlanningTask) -> None:
         self.task, self.model = task, ActionModel(task)

@@ -46,6 +46,8 @@ class PlanCache:
     def _key(self, task: PlanningTask, state: Iterable[Fact], goal: Iterable[Fact] | None) -> _Key:
         if task.domain_text is not None and task.problem_text is not None:
             name = ProblemText.of(task.domain_text, task.problem_text).key
+        elif task.spec is not None:
+            name = f"spec:{task.spec.key}"
         else:
             self._anonymous[id(task)] = task
             name = f"object:{id(task)}"

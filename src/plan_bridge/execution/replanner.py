@@ -21,12 +21,13 @@ from collections.abc import Callable, Sequence
 from plan_bridge.execution.plan_cache import PlanCache
 from plan_bridge.execution.policy import ExecutionReport, ReplanPolicy
 from plan_bridge.execution.semantics import ActionModel
+from plan_bridge.execution.task_view import project
 from plan_bridge.execution.world import WorldState
 from plan_bridge.pddl.task import Fact, PlanningTask
 from plan_bridge.planning.engines import WARM, AutoPlanner
 from plan_bridge.planning.planner import UPPlanner
-from plan_bridge.planning.portfolio import PlannerPortfolio, fast_downward_portfolio
-from plan_bridge.planning.types import Planner, PlanResult, PlanStatus, PlanStep
+from plan_bridge.planning.portfolio import fast_downward_portfolio
+from plan_bridge.planning.types import Planner, PlanResult, PlanStatus, PlanStep, accepts_cancel
 
 __all__ = ["MissionEnded", "Replanner"]
 
@@ -53,8 +54,13 @@ class Replanner:
         cache: PlanCache,
         preempt: threading.Event,
         on_plan: Callable[[str, PlanResult], None],
+        *,
+        projected: bool = False,
     ) -> None:
         self.task = task
+        #: Give the planner only the belief's facts about the task's objects (the
+        #: belief of a task view holds the whole world's: execution/task_view.py).
+        self.projected = projected
         self.planner = planner
         # What plans: ``auto`` with the warm search first (replans start no process).
         self._solver = planner.for_execution() if isinstance(planner, AutoPlanner) else planner
@@ -122,7 +128,7 @@ class Replanner:
                 "aborted",
                 f"replanning budget exhausted ({policy.max_replans} replans) after: {reason}",
             )
-        facts = self.belief.facts
+        facts = project(self.belief.facts, self.task) if self.projected else self.belief.facts
         if policy.reuse_plans:
             reused = self._reuse(facts, goal)
             if reused is not None:
@@ -211,7 +217,7 @@ class Replanner:
 
         def work() -> None:
             try:
-                if isinstance(planner, (UPPlanner, PlannerPortfolio, AutoPlanner)):
+                if accepts_cancel(planner):
                     # The preempt event cancels the solve: its process is killed.
                     box.append(
                         planner.solve(

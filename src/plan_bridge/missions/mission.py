@@ -34,6 +34,7 @@ from plan_bridge.pddl.task import PlanningTask, load_task
 from plan_bridge.skills.registry import SkillRegistry
 
 if TYPE_CHECKING:
+    from plan_bridge.execution.task_view import TaskView
     from plan_bridge.execution.world import World, WorldState
     from plan_bridge.planning.worker import WorkerPool
 
@@ -62,6 +63,9 @@ class MissionSetup:
     sense: Callable[[WorldState], Iterable[Any]] | None = None
     concurrent: bool = False
     """Run independent steps (e.g. of two robots) concurrently."""
+    task_view: TaskView | None = None
+    """Makes the task to plan from the belief (a world with a map:
+    :mod:`plan_bridge.execution.task_view`); None: the target's task throughout."""
     extra: dict[str, Any] = field(default_factory=dict)
 
 

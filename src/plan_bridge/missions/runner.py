@@ -226,14 +226,18 @@ def prepare_mission(
     problems = setup.skills.check(target.task)
     if problems:
         raise MissionError("the skills do not fit the domain:\n  " + "\n  ".join(problems))
+    chosen = planner if planner is not None else get_planner(options.planner)
+    if setup.task_view is not None:
+        chosen = setup.task_view.planner(chosen)
     executive = Executive(
         target.task,
         setup.skills,
-        planner if planner is not None else get_planner(options.planner),
+        chosen,
         world=setup.world,
         policy=policy,
         sense=setup.sense,
         concurrent=setup.concurrent or options.concurrent,
+        task_view=setup.task_view,
     )
     world = executive.world
     if world is not None:

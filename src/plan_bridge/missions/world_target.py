@@ -2,9 +2,12 @@
 
 :func:`load_world_target` is what :func:`~plan_bridge.missions.mission.load_target`
 does for a world file (``WORLD.yaml``) or a world folder (``world.yaml``, optionally
-``goals.yaml``): it loads the world, checks the goal against its names, writes the
-problem of the robosim domain and loads it as the task. The target's setup gives a
-:class:`~plan_bridge.robosim.world.RobosimWorld` and its skills, so
+``goals.yaml``): it loads the world once, reads its map, checks the goal against its
+names, and makes the first task of the map domain in memory
+(:class:`~plan_bridge.maps.tasks.RouteTasks`: the places the goal needs and routes
+between them; no PDDL text is parsed). The target's setup gives a
+:class:`~plan_bridge.robosim.world.RobosimWorld` (the first one on the world just
+loaded), its skills and the task view, so
 :func:`~plan_bridge.missions.runner.prepare_mission` runs it like any other target.
 
 A world folder's variants (``plan-bridge study --variant NAME``) are its events files
@@ -16,6 +19,7 @@ not used).
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -24,11 +28,13 @@ from typing import TYPE_CHECKING
 from plan_bridge.errors import PlanBridgeError
 from plan_bridge.missions.mission import MissionSetup, Target, TargetError, load_domain_module
 from plan_bridge.pddl.constructs import did_you_mean
-from plan_bridge.pddl.task import PlanningTask, load_task_from_text
+from plan_bridge.pddl.task import PlanningTask
 from plan_bridge.robosim.events import WorldEvent, check_events, load_events
 from plan_bridge.robosim.target_files import read_goals
 
 if TYPE_CHECKING:
+    from plan_bridge.maps.model import WorldModel
+    from plan_bridge.maps.tasks import RouteTasks
     from plan_bridge.planning.worker import WorkerPool
     from plan_bridge.robosim.world import RobosimWorld
 
@@ -45,6 +51,11 @@ class WorldTarget(Target):
     problem_text: str = ""
     events: list[WorldEvent] = field(default_factory=list)
     goal_names: tuple[str, ...] = ()
+    view: RouteTasks | None = None
+    """The task view of the world's map (every run of the target shares it)."""
+    load_s: float = 0.0
+    """Seconds pyrobosim took to load the world file (its own cost)."""
+    _loaded: list[tuple[object, WorldModel]] = field(default_factory=list, repr=False)
 
     @property
     def problems(self) -> list[Path]:
@@ -73,8 +84,11 @@ class WorldTarget(Target):
             seed=seed,
             fail_rate=fail_rate,
             events=[*self.events, *variant_events(self.folder or self.world_file, variant)],
+            # The first run acts on the world loaded for the task (pyrobosim's load is
+            # its slowest part); later runs load their own.
+            loaded=self._loaded.pop() if self._loaded else None,
         )
-        return MissionSetup(skills=robosim_skills(world), world=world)
+        return MissionSetup(skills=robosim_skills(world), world=world, task_view=self.view)
 
 
 def variant_events(folder: Path, variant: str) -> list[WorldEvent]:
@@ -120,58 +134,50 @@ def load_world_target(
     prime: WorkerPool | None = None,
     before_parse: Callable[[], object] | None = None,
 ) -> WorldTarget:
-    """The target of a world file or folder: the goal is ``goal``, else the folder's
-    goal named ``problem`` (or its first). Raises :class:`TargetError` and
-    :class:`~plan_bridge.robosim.problem.GoalError` with what is wrong and allowed."""
+    """The target of a world file or folder: the goal is ``goal`` (atoms, or the name
+    of a goal of the folder's goals.yaml), else the folder's goal named ``problem`` (or
+    its first). Raises :class:`TargetError` and
+    :class:`~plan_bridge.maps.goals.GoalError` with what is wrong and allowed."""
+    import time
+
+    from plan_bridge.maps.goals import parse_goal
+    from plan_bridge.maps.tasks import RouteTasks
+    from plan_bridge.robosim.description import describe_world
     from plan_bridge.robosim.loading import load_world_file
-    from plan_bridge.robosim.problem import DOMAIN_PATH, describe_world, parse_goal, problem_text
 
     folder = target if target.is_dir() else None
     goals = read_goals(folder) if folder is not None else {}
-    name = str(problem) if problem is not None and Path(problem) != world_file else ""
-    if goal is None:
-        if not goals:
-            raise TargetError(
-                f'{target}: give the goal with --goal, e.g. --goal "(At apple0 table0_tabletop)" '
-                f"(a world folder may list named goals in goals.yaml)"
-            )
-        if name and Path(name).name not in goals:
-            hint = did_you_mean(Path(name).name, goals)
-            raise TargetError(
-                f"{name}: no such goal in {folder}/goals.yaml{hint}; goals: {', '.join(goals)}"
-            )
-        name = Path(name).name if name else next(iter(goals))
-        goal = goals[name]
+    name, goal = _goal_of(target, world_file, folder, goals, problem, goal)
+    if prime is not None:
+        prime.warm_up(1)  # a planner process starts while pyrobosim loads the world
+    started = time.perf_counter()
     sim = load_world_file(world_file)
+    load_s = time.perf_counter() - started
+    model = describe_world(sim, str(world_file))
+    atoms = parse_goal(goal, model)
+    scheduled = load_events(events) if events is not None else []
+    check_events(
+        scheduled,
+        model.gates,
+        model.items,
+        [spawn for gate in model.gates.values() for spawn in gate.spawns],
+    )
+    if before_parse is not None:
+        before_parse()
+    view = RouteTasks(model)
     try:
-        model = describe_world(sim, str(world_file))
-        atoms = parse_goal(goal, model)
-        scheduled = load_events(events) if events is not None else []
-        check_events(
-            scheduled,
-            model.gates,
-            model.items,
-            [s.name for s in model.spots.values() if s.kind == "spawn"],
-        )
-    finally:
-        for robot in sim.robots:
-            robot.stop_sensor_threads()
-    text = problem_text(model, atoms, name or None)
-    try:
-        task = load_task_from_text(
-            DOMAIN_PATH.read_text(encoding="utf-8"),
-            text,
-            domain_name=str(DOMAIN_PATH),
-            problem_name=f"{world_file} (generated)",
-            prime=prime,
-            before_parse=before_parse,
-        )
+        task = view.task_for(view.belief(), atoms)
     except PlanBridgeError as exc:
-        raise TargetError(f"{world_file}: the generated problem does not load: {exc}") from exc
+        raise TargetError(f"{world_file}: no task for the goal: {exc}") from exc
+    if prime is not None:
+        from plan_bridge.planning.problem_source import problem_source
+
+        prime.prime(problem_source(task).text)
     label = folder.name if folder is not None else world_file.stem
+    spec = task.spec
     return WorldTarget(
         label,
-        DOMAIN_PATH,
+        view.domain_path,
         world_file,
         task,
         folder,
@@ -180,7 +186,49 @@ def load_world_target(
         world_file=world_file,
         goal_text=goal,
         goal_name=name,
-        problem_text=text,
+        problem_text=spec.pddl_text() if spec is not None else "",
         events=scheduled,
         goal_names=tuple(goals),
+        view=view,
+        load_s=load_s,
+        _loaded=[(sim, model)],
     )
+
+
+_GOAL_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_-]*$")
+
+
+def _goal_of(
+    target: Path,
+    world_file: Path,
+    folder: Path | None,
+    goals: dict[str, str],
+    problem: str | Path | None,
+    goal: str | None,
+) -> tuple[str, str]:
+    """(the goal's name or "", its atoms' text) of what was asked for: ``goal``, a
+    name of goals.yaml given as ``goal`` or ``problem``, or the first of goals.yaml."""
+    if goal is not None and _GOAL_NAME.match(goal.strip()):
+        word = goal.strip()
+        if word in goals:
+            return word, goals[word]
+        known = f"; goals of {folder}/goals.yaml: {', '.join(goals)}" if goals else ""
+        raise TargetError(
+            f"--goal {word}: not a goal atom such as (At apple0 table0_tabletop), nor the "
+            f"name of a goal{did_you_mean(word, goals)}{known}"
+        )
+    if goal is not None:
+        return "", goal
+    name = str(problem) if problem is not None and Path(problem) != world_file else ""
+    if not goals:
+        raise TargetError(
+            f'{target}: give the goal with --goal, e.g. --goal "(At apple0 table0_tabletop)" '
+            f"(a world folder may list named goals in goals.yaml)"
+        )
+    if name and Path(name).name not in goals:
+        hint = did_you_mean(Path(name).name, goals)
+        raise TargetError(
+            f"{name}: no such goal in {folder}/goals.yaml{hint}; goals: {', '.join(goals)}"
+        )
+    name = Path(name).name if name else next(iter(goals))
+    return name, goals[name]

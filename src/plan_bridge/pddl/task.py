@@ -32,6 +32,7 @@ from plan_bridge.pddl.source import (
     read_source,
     replace_init,
 )
+from plan_bridge.pddl.spec import ProblemSpec
 from plan_bridge.pddl.up_runtime import ensure_unified_planning
 
 __all__ = [
@@ -46,6 +47,7 @@ __all__ = [
     "load_task_from_text",
     "parse_fact",
     "task_from_problem",
+    "task_from_spec",
 ]
 
 
@@ -153,6 +155,16 @@ class PlanningTask:
     """The PDDL domain text, when the task was loaded from PDDL."""
     problem_text: str | None = None
     """The PDDL problem text (with the current initial state), when loaded from PDDL."""
+    spec: ProblemSpec | None = None
+    """The problem as data, when plan_bridge built it (:func:`task_from_spec`): it
+    travels to the planners as such, never through a PDDL reader."""
+
+    @property
+    def pddl_problem(self) -> str | None:
+        """The problem's PDDL text: the text read, or the one a spec writes."""
+        if self.problem_text is not None:
+            return self.problem_text
+        return self.spec.pddl_text() if self.spec is not None else None
 
     @property
     def name(self) -> str:
@@ -220,13 +232,14 @@ class PlanningTask:
             fluent = problem.fluent(atom[0])
             problem.set_initial_value(fluent(*(problem.object(arg) for arg in atom[1:])), True)
         problem_text = None
+        spec = None if self.spec is None else self.spec.with_state(init=new_facts)
         if self.problem_text is not None:
             # Rewriting the (:init ...) of the original text keeps every name as it
             # was; UP's PDDLWriter would take seconds on large problems.
             source = SourceText(self.problem_text, str(self.problem_path or "<problem>"), "problem")
             problem_text = replace_init(source, sorted(new_facts))
         return dataclasses.replace(
-            self, problem=problem, initial_facts=new_facts, problem_text=problem_text
+            self, problem=problem, initial_facts=new_facts, problem_text=problem_text, spec=spec
         )
 
     # -- plans -----------------------------------------------------------------
@@ -380,6 +393,14 @@ def task_from_problem(
         warnings=tuple(warnings),
         type_ancestors=ancestors,
     )
+
+
+def task_from_spec(spec: ProblemSpec, *, warnings: Sequence[str] = ()) -> PlanningTask:
+    """The task of a problem built in memory (:class:`~plan_bridge.pddl.spec.ProblemSpec`):
+    its unified-planning problem made with UP's API, no PDDL text read."""
+    ensure_unified_planning()
+    task = task_from_problem(spec.build(), warnings=warnings)
+    return dataclasses.replace(task, domain_text=spec.domain, spec=spec)
 
 
 def _type_name(up_type: Any) -> str:

@@ -1,13 +1,16 @@
 """How a task travels to the planner workers: its PDDL text and the names used in it.
 
 A task loaded from PDDL travels as the very text that was read (names come back
-unchanged); a problem built in code is written once per task object with UP's
-PDDLWriter, whose renamings are mapped back when the plan returns.
+unchanged); a task plan_bridge built (a :class:`~plan_bridge.pddl.spec.ProblemSpec`)
+as its JSON data, which the worker builds with UP's API; a problem built in code by a
+user is written once per task object with UP's PDDLWriter, whose renamings are mapped
+back when the plan returns.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import json
 import threading
 import warnings
 import weakref
@@ -50,6 +53,11 @@ def problem_source(task: PlanningTask) -> _ProblemSource:
         # Loaded from PDDL: the worker re-reads the very text we read, so names come
         # back unchanged.
         return _ProblemSource(ProblemText.of(task.domain_text, task.problem_text))
+    spec = task.spec
+    if spec is not None:
+        # Built by plan_bridge: the data goes, never text for UP's reader.
+        data = json.dumps(spec.to_json(), separators=(",", ":"))
+        return _ProblemSource(ProblemText(spec.domain, "", f"spec-{spec.key}", data))
     with _cache_lock:
         cached = _written.get(task)
     if cached is not None:

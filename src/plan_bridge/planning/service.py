@@ -28,6 +28,8 @@ from collections import OrderedDict
 from collections.abc import Iterable, Sequence
 from typing import IO, Any
 
+from plan_bridge.pddl.spec import ProblemSpec
+from plan_bridge.planning.kairos_direct import KAIROS, KairosBase, solve_with_kairos
 from plan_bridge.planning.warm import WARM, WarmState, solve_warm
 from plan_bridge.planning.worker import BASE_CACHE_SIZE
 
@@ -72,9 +74,16 @@ def serve(requests: IO[str], replies: IO[str]) -> None:
 class _Base:
     """A parsed base problem and what deriving problems from it needs."""
 
-    def __init__(self, problem: Any) -> None:
+    def __init__(
+        self, problem: Any, domain: str, problem_text: str | None, spec: ProblemSpec | None
+    ) -> None:
         from plan_bridge.pddl.up_runtime import lean_copy
 
+        #: The texts it came from (a built problem: its spec), for Kairos' own reader.
+        self.domain_text = domain
+        self.problem_text = problem_text
+        self.spec = spec
+        self.kairos: KairosBase | None = None
         self.problem = lean_copy(problem)
         self.kind = self.problem.kind
         # Fact -> fluent expression of the atoms true in the base's initial state.
@@ -166,13 +175,19 @@ _bases: OrderedDict[str, _Base] = OrderedDict()
 
 
 def _parse_base(reader: Any, request: dict[str, Any]) -> float:
-    """Parse the request's text into the cache under its key: the time it took."""
+    """Parse the request's text (or build its spec) into the cache under its key: the
+    time it took."""
     import warnings
 
     started = time.monotonic()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the client reported them when it loaded the task
-        base = _Base(reader.parse_problem_string(request["domain"], request["problem"]))
+        if request.get("spec") is not None:
+            spec = ProblemSpec.from_json(request["domain"], json.loads(request["spec"]))
+            base = _Base(spec.build(), request["domain"], None, spec)
+        else:
+            problem = reader.parse_problem_string(request["domain"], request["problem"])
+            base = _Base(problem, request["domain"], request["problem"], None)
     _bases[request["base"]] = base
     while len(_bases) > BASE_CACHE_SIZE:
         _bases.popitem(last=False)
@@ -199,13 +214,19 @@ def _solve_request(reader: Any, request: dict[str, Any]) -> dict[str, Any]:
     reused = key in _bases
     parse_time = 0.0
     if not reused:
-        if request.get("domain") is None or request.get("problem") is None:
+        if request.get("domain") is None or (
+            request.get("problem") is None and request.get("spec") is None
+        ):
             return {"outcome": "missing-base"}
         parse_time = _parse_base(reader, request)
     base = _bases[key]
     _bases.move_to_end(key)
     if request["engine"] == WARM:
         return {**_warm_request(base, request), "parse_time_s": parse_time, "reused": reused}
+    if request["engine"] == KAIROS:
+        direct = solve_with_kairos(base, request)
+        if direct is not None:
+            return {**direct, "parse_time_s": parse_time, "reused": reused}
     started = time.monotonic()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")

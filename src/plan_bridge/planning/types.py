@@ -11,13 +11,22 @@ read a plan.
 from __future__ import annotations
 
 import enum
+import threading
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
-from typing import Any, Protocol, runtime_checkable
+from typing import Any, Protocol, TypeGuard, runtime_checkable
 
 from plan_bridge.pddl.task import Fact, FactLike, PlanningTask, format_fact
 
-__all__ = ["PlanResult", "PlanStatus", "PlanStep", "Planner", "snapshot_values"]
+__all__ = [
+    "CancellablePlanner",
+    "PlanResult",
+    "PlanStatus",
+    "PlanStep",
+    "Planner",
+    "accepts_cancel",
+    "snapshot_values",
+]
 
 
 class PlanStatus(str, enum.Enum):
@@ -149,3 +158,28 @@ def snapshot_values(
     if values is None and isinstance(carried, Mapping):
         return carried
     return values
+
+
+class CancellablePlanner(Planner, Protocol):
+    """A :class:`Planner` whose ``solve`` also takes ``cancel``: an event that stops the
+    solve (the engines of this package kill their planner process)."""
+
+    def solve(
+        self,
+        task: PlanningTask,
+        *,
+        timeout: float,
+        initial_state: Iterable[FactLike] | None = None,
+        goal: Iterable[FactLike] | None = None,
+        cancel: threading.Event | None = None,
+    ) -> PlanResult: ...
+
+
+def accepts_cancel(planner: Planner) -> TypeGuard[CancellablePlanner]:
+    """Whether ``planner.solve`` takes ``cancel=`` (:class:`CancellablePlanner`)."""
+    import inspect
+
+    try:
+        return "cancel" in inspect.signature(planner.solve).parameters
+    except (TypeError, ValueError):
+        return False

@@ -11,8 +11,10 @@ Why a plain subprocess speaking JSON lines, not ``multiprocessing``:
 * the worker starts its own session, so on timeout we kill the whole process
   group -- the worker *and* the Fast Downward translator/search processes it
   started -- with one ``killpg``;
-* nothing is pickled: the task travels as PDDL text (written by UP's PDDLWriter),
-  the plan comes back as action and object names.
+* nothing is pickled: a task read from PDDL travels as its text, a task plan_bridge
+  built (a :class:`~plan_bridge.pddl.spec.ProblemSpec`) as JSON data, a problem
+  built in code by a user as the text UP's PDDLWriter writes; the plan comes back as
+  action and object names.
 
 Workers are kept warm in a :class:`WorkerPool`: unified-planning is imported once
 per worker (about 0.5 s), and a worker is only replaced after it was killed.
@@ -185,15 +187,7 @@ class Worker:
         """
         self._next_id += 1
         self._parsing.add(self._next_id)
-        line = json.dumps(
-            {
-                "op": "parse",
-                "id": self._next_id,
-                "base": base.key,
-                "domain": base.domain,
-                "problem": base.problem,
-            }
-        )
+        line = json.dumps({"op": "parse", "id": self._next_id, "base": base.key, **base.fields()})
         self._remember(base.key)
         # Take the lock before the thread starts, so that a request sent after this
         # call is written after the parse request.
@@ -254,7 +248,7 @@ class Worker:
             send_text = base.key not in self._bases
             while True:
                 if send_text:
-                    request.update(domain=base.domain, problem=base.problem)
+                    request.update(base.fields())
                 reply = self._exchange(request, deadline, timeout, started, cancel)
                 if isinstance(reply, SolveReply):
                     self._bases.pop(base.key, None)

@@ -11,81 +11,136 @@ from __future__ import annotations
 
 import itertools
 import math
-import time
 from collections.abc import Callable
 from typing import Any
 
+from plan_bridge.maps.graph import Leg, Route
+from plan_bridge.robosim.description import AT_PLACE_M
+from plan_bridge.robosim.room_paths import room_path
 from plan_bridge.robosim.world import ACTION_SECONDS, ActionResult, RobosimWorld
 
-__all__ = ["act", "follow", "plan_drive"]
+__all__ = ["act", "cross_path", "drive_route", "follow", "plan_route"]
 
 Preempted = Callable[[], bool]
 
 
-def plan_drive(world: RobosimWorld, robot: Any, target: str) -> tuple[Any, ActionResult]:
-    """Plan the path of a drive to spot ``target`` (pyrobosim's path planner)."""
-    spot = world.model.spots.get(world.name(target))
-    if spot is None:
-        return None, ActionResult("INVALID_ACTION", f"{target} is not a spot of {world.model.name}")
-    world.begin(robot)
-    if spot.kind == "door":
-        goal: Any = _door_pose(world, spot.name)
-    else:
-        goal = world.sim.get_entity_by_name(spot.name)
-    began = time.perf_counter()
-    path = _without_repeats(robot.plan_path(goal=goal))
-    world.robot_wall_s += time.perf_counter() - began
-    if path is None or path.num_poses < 2:
-        if (path is not None and path.num_poses == 1) or world.spot_of(robot) == spot.name:
-            return None, ActionResult("SUCCESS", f"already at {spot.name}")
+def plan_route(world: RobosimWorld, robot: Any, target: str) -> tuple[Route | None, ActionResult]:
+    """The route of a drive to place ``target``: the map's shortest way over the
+    hallways the robots have not seen closed."""
+    place = world.name(target)
+    if place not in world.model.places:
         return None, ActionResult(
-            "PLANNING_FAILURE", f"no path from {world.spot_of(robot)} to {spot.name}"
+            "INVALID_ACTION", f"{target} is not a place of {world.model.name}"
         )
-    return path, ActionResult("SUCCESS")
+    world.begin(robot)
+    here = world.spot_of(robot)
+    if here == place and _at_pose(world, robot, place):
+        return None, ActionResult("SUCCESS", f"already at {place}")
+    route = world.map.route(here, place, world.closed_halls())
+    if route is None:
+        shut = ", ".join(sorted(world.closed_halls())) or "none"
+        return None, ActionResult(
+            "PLANNING_FAILURE",
+            f"no way from {here} to {place} over the hallways not seen closed (closed: {shut})",
+        )
+    return route, ActionResult("SUCCESS")
 
 
-def _without_repeats(path: Any) -> Any:
-    """``path`` without waypoints at the position of the one before (the last one's yaw
-    kept). pyrobosim's bidirectional RRT sometimes puts the node where its two trees met
-    twice, the second time with a yaw of 0 (``fill_yaws`` of a zero-length leg): the
-    robot would turn there and back (time that differs from run to run, as whether it
-    happens depends on the order of a set of nodes), and pyrobosim would warn about
-    trajectory points at the same time."""
+def drive_route(
+    world: RobosimWorld, robot: Any, route: Route, preempted: Preempted
+) -> ActionResult:
+    """Drive ``route`` leg by leg: inside a room straight to the next place (round what
+    is in the way with pyrobosim's planner), through a hallway along its centre line. A
+    hallway found closed at its doorway ends the drive there."""
+    first = True
+    legs = list(route.legs) or [Leg(route.places[0], route.places[-1], None)]
+    for leg in legs:
+        if leg.hall is not None:
+            path, result = cross_path(world, robot, leg.hall, leg.end, begin=False)
+        else:
+            path, result = _room_path(world, robot, leg.end), ActionResult("SUCCESS")
+        if result.status != "SUCCESS":
+            return result
+        if path is None:
+            continue
+        result = follow(world, robot, path, preempted, first=first)
+        first = False
+        if result.status != "SUCCESS":
+            return result
+        if leg.hall is not None:
+            world.crossed.setdefault(robot.name, []).append(leg.hall)
+    return ActionResult("SUCCESS")
+
+
+def _at_pose(world: RobosimWorld, robot: Any, place: str) -> bool:
+    pose = robot.get_pose()
+    info = world.model.places[place]
+    return math.hypot(float(pose.x) - info.x, float(pose.y) - info.y) < AT_PLACE_M
+
+
+def _place_pose(world: RobosimWorld, place: str, heading_from: Any) -> Any:
+    """Where a robot stands at ``place``: the pose pyrobosim gives the spawn or room it
+    is named after, else its point facing away from ``heading_from``."""
+    from pyrobosim.utils.pose import Pose
+
+    entity = world.sim.get_entity_by_name(place)
+    poses = getattr(entity, "nav_poses", None) if entity is not None else None
+    info = world.model.places[place]
+    if poses and math.hypot(float(poses[0].x) - info.x, float(poses[0].y) - info.y) < 0.05:
+        return poses[0]
+    yaw = math.atan2(info.y - float(heading_from.y), info.x - float(heading_from.x))
+    return Pose(x=info.x, y=info.y, yaw=yaw)
+
+
+def _room_path(world: RobosimWorld, robot: Any, target: str) -> Any:
+    """A path inside the room of place ``target`` to it: straight when nothing is in
+    the way, else round the furniture (:mod:`.room_paths`)."""
     from pyrobosim.utils.path import Path
+    from pyrobosim.utils.pose import Pose
 
-    if path is None or path.num_poses < 2:
-        return path
-    kept = [path.poses[0]]
-    for index, pose in enumerate(path.poses[1:], start=1):
-        if _dist(kept[-1], pose) > 1e-9:
-            kept.append(pose)
-        elif index == path.num_poses - 1 and len(kept) > 1:
-            kept[-1] = pose
-    if len(kept) == path.num_poses:
-        return path
-    return Path(poses=kept, planning_time=path.planning_time)
+    start = robot.get_pose()
+    goal = _place_pose(world, target, start)
+    if _dist(start, goal) < 1e-6:
+        return None
+    room = world.sim.get_room_by_name(world.model.places[target].room)
+    if room is None:
+        return Path(poses=[start, goal])
+    points = room_path(room, (float(start.x), float(start.y)), (float(goal.x), float(goal.y)))
+    poses = [start]
+    for x, y in points[1:-1]:
+        yaw = math.atan2(y - float(poses[-1].y), x - float(poses[-1].x))
+        poses.append(Pose(x=x, y=y, yaw=yaw))
+    poses.append(goal)
+    return Path(poses=poses)
 
 
 def cross_path(
-    world: RobosimWorld, robot: Any, hall_name: str, target: str
+    world: RobosimWorld, robot: Any, hall_name: str, target: str, *, begin: bool = True
 ) -> tuple[Any, ActionResult]:
-    """The path through a hallway to its end ``target``: its centre line."""
+    """The path through a hallway to its doorway ``target``: its centre line; refused
+    when the hallway is closed (what the robot sees at its door)."""
     from pyrobosim.utils.path import Path
+    from pyrobosim.utils.pose import Pose
 
-    world.begin(robot)
-    hall = world.sim.get_hallway_by_name(world.name(hall_name))
-    if hall is None:
+    if begin:
+        world.begin(robot)
+    name = world.name(hall_name)
+    hall = world.model.halls.get(name)
+    entity = world.sim.get_hallway_by_name(name)
+    if hall is None or entity is None:
         return None, ActionResult("INVALID_ACTION", f"no hallway {hall_name}")
-    if not hall.is_open:
-        return None, ActionResult("PRECONDITION_FAILURE", f"{hall.name} is closed")
-    goal = _door_pose(world, world.name(target))
-    nodes = [node.pose for node in hall.graph_nodes]
-    if _dist(nodes[0], goal) < _dist(nodes[-1], goal):
-        nodes.reverse()
+    if name in world.seen_open:
+        world.seen_open[name] = bool(entity.is_open)
+    if not entity.is_open:
+        return None, ActionResult("PRECONDITION_FAILURE", f"{name} is closed")
+    points = list(hall.path)
+    if world.name(target) == hall.ends[0]:
+        points.reverse()
     poses = [robot.get_pose()]
-    for pose in [*nodes, goal]:
-        if _dist(poses[-1], pose) > 1e-6:
-            poses.append(pose)
+    for x, y in points:
+        if math.hypot(float(poses[-1].x) - x, float(poses[-1].y) - y) > 1e-6:
+            yaw = math.atan2(y - float(poses[-1].y), x - float(poses[-1].x))
+            poses.append(Pose(x=x, y=y, yaw=yaw))
     if len(poses) < 2:
         return None, ActionResult("SUCCESS", f"already at {target}")
     return Path(poses=poses), ActionResult("SUCCESS")
@@ -188,7 +243,7 @@ def _check_place(
         if here != spot:
             return ActionResult("PRECONDITION_FAILURE", f"{robot.name} is at {here}, not at {spot}")
         gate = world.name(args[1])
-        if world.model.spots[here].gate != gate:
+        if gate not in world.model.places[here].gates:
             return ActionResult("PRECONDITION_FAILURE", f"{gate} cannot be reached from {here}")
         return None
     here = world.spot_of(robot)
@@ -202,7 +257,7 @@ def _charge(world: RobosimWorld, robot: Any, args: list[str]) -> ActionResult:
     location = world.name(args[2])
     here = world.spot_of(robot)
     gate = world.model.gates.get(location)
-    if here != spot or gate is None or not gate.is_charger or spot not in gate.spawns:
+    if here != spot or gate is None or not gate.is_charger or location != _fixture(world, spot):
         return ActionResult("PRECONDITION_FAILURE", f"{robot.name} is at {here}, not at a charger")
     if world.draw_fault(robot, "charge"):
         return ActionResult("EXECUTION_FAILURE", "Simulated charging failure.")
@@ -210,10 +265,9 @@ def _charge(world: RobosimWorld, robot: Any, args: list[str]) -> ActionResult:
     return ActionResult("SUCCESS")
 
 
-def _door_pose(world: RobosimWorld, door: str) -> Any:
-    spot = world.model.spots[door]
-    hall = world.sim.get_hallway_by_name(spot.gate)
-    return min(hall.nav_poses, key=lambda p: math.hypot(p.x - spot.x, p.y - spot.y))
+def _fixture(world: RobosimWorld, place: str) -> str | None:
+    info = world.model.places.get(place)
+    return info.fixture if info is not None else None
 
 
 def _dist(a: Any, b: Any) -> float:

@@ -23,17 +23,16 @@ def _pose(x: float, y: float, yaw: float = 0.0) -> Any:
     return Pose(x=x, y=y, yaw=yaw)
 
 
-def _put_robot(world: RobosimWorld, robot: Any, spot_name: str) -> None:
-    """Stand ``robot`` at a spot's navigation pose (what a user's drive did)."""
+def _put_robot(world: RobosimWorld, robot: Any, place_name: str) -> None:
+    """Stand ``robot`` at a place (what a user's drive did): the navigation pose of the
+    spawn or room it is named after, else its point."""
     import copy
 
-    spot = world.model.spots[spot_name]
-    if spot.kind == "door":
-        hall = world.sim.get_hallway_by_name(spot.gate)
-        pose = min(hall.nav_poses, key=lambda p: abs(p.x - spot.x) + abs(p.y - spot.y))
-    else:
-        pose = world.sim.get_entity_by_name(spot.name).nav_poses[0]
-    robot.set_pose(copy.deepcopy(pose))
+    place = world.model.places[place_name]
+    entity = world.sim.get_entity_by_name(place.name)
+    poses = getattr(entity, "nav_poses", None) if entity is not None else None
+    pose = copy.deepcopy(poses[0]) if poses else _pose(place.x, place.y, robot.get_pose().get_yaw())
+    robot.set_pose(pose)
     held = robot.manipulated_object
     if held is not None:
         held.set_pose(robot.get_pose())
@@ -71,7 +70,8 @@ def adopt_step(world: RobosimWorld, step: PlanStep, observations: Sequence[Obser
         start = robot.get_pose()
         _put_robot(world, robot, args[2])
         world.record_drive(robot, [start, robot.get_pose()])
-        drained = world.model.distance(before, args[2]) if before in world.model.spots else 0.0
+        route = world.map.route(before, args[2]) if before in world.model.places else None
+        drained = route.length if route is not None else 0.0
         info = next(r for r in world.model.robots if r.name == robot.name)
         robot.battery_level = max(0.0, float(robot.battery_level) - info.drain * drained)
         world.distance_m += drained
@@ -81,8 +81,9 @@ def adopt_step(world: RobosimWorld, step: PlanStep, observations: Sequence[Obser
     elif action == "place":
         robot = world.robot(args[0])
         held = robot.manipulated_object
-        if held is not None:
-            _put_object(world, held.name, args[2])
+        place = world.model.places.get(args[2])
+        if held is not None and place is not None and place.spawns:
+            _put_object(world, held.name, place.spawns[0])
     elif action in ("open", "close"):
         _set_gate(world, args[1], action == "open", None)
     elif action == "detect":
@@ -110,8 +111,8 @@ def _adopt_observation(world: RobosimWorld, fact: tuple[str, ...], value: bool |
         robot = world.robots.get(args[0].lower())
         if robot is not None:
             _put_robot(world, robot, args[1])
-        elif args[1] in world.model.spots and world.model.spots[args[1]].kind == "spawn":
-            _put_object(world, args[0], args[1])
+        elif args[1] in world.model.places and world.model.places[args[1]].is_spawn:
+            _put_object(world, args[0], world.model.places[args[1]].spawns[0])
     elif name == "holding" and value is True:
         world.robot(args[0])._attach_object(world.sim.get_object_by_name(args[1]))
     elif name == "searched" and isinstance(value, bool):
@@ -164,6 +165,8 @@ def snapshot_world(world: RobosimWorld) -> dict[str, Any]:
         "battery_start": dict(world.battery_start),
         "charged": dict(world.charged),
         "searched": sorted(world.searched),
+        "seen_open": dict(world.seen_open),
+        "crossed": {name: list(halls) for name, halls in world.crossed.items()},
         "changes": list(world.changes),
         "pending": [event.to_json() | {"origin": event.origin} for event in world._pending],
         "robots": robots,
@@ -212,6 +215,11 @@ def restore_world(world: RobosimWorld, data: dict[str, Any]) -> None:
     world.battery_start.update({k: float(v) for k, v in data.get("battery_start", {}).items()})
     world.charged.update({k: float(v) for k, v in data.get("charged", {}).items()})
     world.searched = set(data["searched"])
+    # (Snapshots written before the map lack these: the world file's and none.)
+    world.seen_open.update({k: bool(v) for k, v in data.get("seen_open", {}).items()})
+    world.crossed = {
+        r.name: list(data.get("crossed", {}).get(r.name, [])) for r in world.sim.robots
+    }
     world.changes = list(data["changes"])
     pending = data["pending"]
     world._pending = parse_events(

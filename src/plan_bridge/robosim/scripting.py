@@ -6,7 +6,7 @@ machines as the planned missions (:func:`~plan_bridge.robosim.skills.skill_for`)
 the same :class:`~plan_bridge.robosim.world.RobosimWorld`, with the recoveries a careful
 author anticipates, built from these states:
 
-* :class:`Drive` goes to a spot leg by leg on the shortest way not known blocked
+* :class:`Drive` goes to a place leg by leg on the shortest way not known blocked
   (:func:`route`), tries each leg three times, opens a closed door it finds on its way
   (a hallway closed but not locked), and gives up on a hallway it finds locked or
   cannot open (``blocked``: the caller looks for another way);
@@ -24,7 +24,6 @@ The machines share the userdata keys ``blocked`` (hallways known impassable) and
 
 from __future__ import annotations
 
-import heapq
 import itertools
 from collections.abc import Iterable
 from typing import Any
@@ -58,48 +57,25 @@ _FULL = 99.9
 
 
 def route(world: RobosimWorld, start: str, goal: str, blocked: Iterable[str]) -> list[str] | None:
-    """The shortest chain of spots from ``start`` to ``goal`` on the map: spots of one
-    room are joined by drives, a hallway's two ends by its crossing (not ``blocked``
-    ones); None when there is no way."""
-    model = world.model
-    shut = set(blocked)
-    ends = {frozenset(pair): hall for hall, pair in model.hall_ends.items() if hall not in shut}
-    best = {start: 0.0}
-    before: dict[str, str] = {}
-    queue = [(0.0, start)]
-    while queue:
-        cost, spot = heapq.heappop(queue)
-        if spot == goal:
-            chain = [goal]
-            while chain[-1] != start:
-                chain.append(before[chain[-1]])
-            return chain[::-1]
-        if cost > best[spot]:
-            continue
-        room = model.spots[spot].room
-        for other in model.spots.values():
-            joined = other.room == room or frozenset((spot, other.name)) in ends
-            if other.name == spot or not joined:
-                continue
-            step = cost + model.distance(spot, other.name)
-            if step < best.get(other.name, float("inf")):
-                best[other.name], before[other.name] = step, spot
-                heapq.heappush(queue, (step, other.name))
-    return None
+    """The shortest chain of places from ``start`` to ``goal`` on the map: places of
+    one room are joined by drives, a hallway's two doorways by its crossing (not
+    ``blocked`` ones); None when there is no way."""
+    found = world.map.route(start, goal, set(blocked))
+    return None if found is None else list(found.places)
 
 
 def route_length(world: RobosimWorld, chain: list[str] | None) -> float:
-    """Metres of a chain of spots (infinite for no chain)."""
+    """Metres of a chain of places (infinite for no chain)."""
     if chain is None:
         return float("inf")
-    return sum(world.model.distance(a, b) for a, b in itertools.pairwise(chain))
+    edges = world.map.graph.edges
+    return sum(float(edges[a, b]["weight"]) for a, b in itertools.pairwise(chain))
 
 
 def charger_spot(world: RobosimWorld) -> str | None:
-    """The first spawn of a charger of the world (None: the world has no charger)."""
-    return next(
-        (g.spawns[0] for g in world.model.gates.values() if g.is_charger and g.spawns), None
-    )
+    """The place of the first charger of the world (None: the world has no charger)."""
+    chargers = world.model.chargers()
+    return chargers[0] if chargers else None
 
 
 class SkillState(smach.State):
@@ -128,7 +104,7 @@ class SkillState(smach.State):
             running.request_preempt()
 
     def here(self) -> str:
-        """The spot the robot is at (its room's spot when between spots)."""
+        """The place the robot is at (the nearest of its room when between places)."""
         return self.world.spot_of(self.world.robot(self.robot))
 
     def gate_seen(self, gate: str) -> tuple[bool | None, bool | None]:
@@ -185,7 +161,7 @@ class Drive(SkillState):
         chain = route(self.world, self.here(), self.goal, ud.blocked)
         if chain is None:
             return "blocked"
-        halls = {frozenset(pair): hall for hall, pair in self.world.model.hall_ends.items()}
+        halls = {frozenset(hall.ends): hall.name for hall in self.world.model.halls.values()}
         for origin, target in itertools.pairwise(chain):
             hall = halls.get(frozenset((origin, target)))
             leg = ("cross", origin, target, hall) if hall else ("navigate", origin, target)
@@ -230,12 +206,10 @@ class Drive(SkillState):
 
     def _locked_halls(self) -> set[str]:
         """The hallways the robot sees closed and locked from where it is."""
-        seen = dict(
-            self.world.observe(self.world.robot(self.robot), list(self.world.model.hall_ends))
-        )
+        seen = dict(self.world.observe(self.world.robot(self.robot), list(self.world.model.halls)))
         return {
             hall
-            for hall in self.world.model.hall_ends
+            for hall in self.world.model.halls
             if seen.get(("isopen", hall.lower())) is False
             and seen.get(("islocked", hall.lower())) is not False
         }
@@ -264,7 +238,7 @@ class Act(SkillState):
 def locked_halls(world: RobosimWorld) -> list[str]:
     """The hallways locked in the world as loaded: the ``blocked`` a mission starts with."""
     model = world.model
-    return sorted(hall for hall in model.hall_ends if model.gates[hall].is_locked)
+    return sorted(hall for hall in model.halls if model.gates[hall].is_locked)
 
 
 #: The userdata keys of the machines here: hallways known blocked, legs driven.
@@ -282,10 +256,11 @@ def deliver(
     """``GO_TO_OBJECT -> OPEN -> PICK -> GO_TO_TARGET -> PLACE``: carry ``item`` to spawn
     ``target``; outcomes ``done``, ``aborted``, ``preempted``."""
     model = world.model
-    source = model.items[item]
+    source = model.item_place(item)
     if source is None:
         raise ValueError(f"{item} is held at the start: nothing to carry")
-    location, target_location = model.spots[source].gate or "", model.spots[target].gate or ""
+    location = model.places[source].fixture or ""
+    target_location = model.places[target].fixture or ""
     sm = _machine("done", "aborted")
     with sm:
         smach.StateMachine.add(
@@ -330,7 +305,7 @@ def go_to(
         )
         smach.StateMachine.add("DRIVE", Drive(world, robot, goal), {"blocked": "CHECK_BATTERY"})
         if charger is not None:
-            location = world.model.spots[charger].gate or ""
+            location = world.model.places[charger].fixture or ""
             smach.StateMachine.add(
                 "TO_CHARGER",
                 Drive(world, robot, charger),

@@ -2,8 +2,10 @@
 
 Every skill is a small StateMachine acting on a :class:`~.world.RobosimWorld`:
 
-* ``navigate``: ``PLAN`` (pyrobosim's path planner) -> ``DRIVE`` (its path executor)
-  -> ``LOOK``;
+* ``navigate``: ``PLAN`` (the map's route over the hallways the robots have not seen
+  closed) -> ``DRIVE`` (leg by leg with pyrobosim's path executor: inside rooms, and
+  through hallways along their centre lines; a hallway found closed at its door ends
+  the drive there) -> ``LOOK``;
 * ``cross``: ``PLAN`` (the hallway's centre line, refused when the hallway is closed)
   -> ``DRIVE`` -> ``LOOK``;
 * ``pick``, ``place``, ``open``, ``close``, ``detect``, ``charge``: ``ACT`` -> ``LOOK``.
@@ -22,7 +24,7 @@ from collections.abc import Callable
 from typing import Any
 
 import smach
-from plan_bridge.robosim.actions import act, cross_path, follow, plan_drive
+from plan_bridge.robosim.actions import act, cross_path, drive_route, follow, plan_route
 from plan_bridge.robosim.world import ActionResult, RobosimWorld
 from plan_bridge.skills.kit import SKILL_OUTCOMES, skill_machine
 from plan_bridge.skills.registry import OBSERVATIONS_KEY, SkillRegistry
@@ -33,12 +35,12 @@ __all__ = ["ACTIONS", "robosim_skills", "skill_for"]
 ACTIONS: dict[str, tuple[str, ...]] = {
     "navigate": ("robot", "origin", "target"),
     "cross": ("robot", "origin", "target", "hallway"),
-    "pick": ("robot", "object", "spawn", "location"),
-    "place": ("robot", "object", "spawn", "location"),
-    "open": ("robot", "gate", "spot"),
-    "close": ("robot", "gate", "spot"),
-    "detect": ("robot", "spawn", "location"),
-    "charge": ("robot", "spawn", "location"),
+    "pick": ("robot", "object", "place", "location"),
+    "place": ("robot", "object", "place", "location"),
+    "open": ("robot", "gate", "place"),
+    "close": ("robot", "gate", "place"),
+    "detect": ("robot", "place", "location"),
+    "charge": ("robot", "place", "location"),
 }
 _RESULT_KEYS = ["status", "message"]
 
@@ -104,13 +106,19 @@ def skill_for(world: RobosimWorld, action: str, *args: str) -> smach.StateMachin
                     return ActionResult("CANCELED", "preempted before planning")
                 if action == "cross":
                     path, result = cross_path(world, robot, args[3], args[2])
+                    ud.path = path
                 else:
-                    path, result = plan_drive(world, robot, args[2])
-                ud.path = path
+                    route, result = plan_route(world, robot, args[2])
+                    ud.path = route
                 return result
 
             def drive(ud: smach.UserData, preempted: Callable[[], bool]) -> ActionResult:
-                return follow(world, robot, ud.path, preempted)
+                if action == "cross":
+                    result = follow(world, robot, ud.path, preempted)
+                    if result.status == "SUCCESS":
+                        world.crossed.setdefault(robot.name, []).append(world.name(args[3]))
+                    return result
+                return drive_route(world, robot, ud.path, preempted)
 
             smach.StateMachine.add(
                 "PLAN",

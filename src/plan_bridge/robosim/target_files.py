@@ -23,8 +23,8 @@ __all__ = [
     "world_file_of",
 ]
 
-DOMAIN_PATH = Path(__file__).with_name("domain.pddl")
-"""The robosim domain shipped with plan_bridge."""
+DOMAIN_PATH = Path(__file__).parents[1] / "maps" / "domain.pddl"
+"""The map domain shipped with plan_bridge (the task level of pyrobosim worlds)."""
 WORLD_FILE = "world.yaml"
 GOALS_FILE = "goals.yaml"
 WORLD_SUFFIXES = (".yaml", ".yml")

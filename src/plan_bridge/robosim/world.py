@@ -13,10 +13,13 @@ preempt stops a drive half-way).
 run's seed (its battery usage is the world file's), and numpy's generator (paths,
 grasps, placements) is seeded before every action, so a seeded run repeats.
 
-**Sensing** reports what a robot can observe where it is: its own spot, what it holds,
-its battery, the open/locked state of the hallways and locations of its room that the
-step is about, and the objects of the spawn it stands at (what pyrobosim's ``detect``
-sees there, when the location is open) - never the planner's effects read back.
+**Sensing** reports what a robot can observe where it is: its own place (of the map,
+:mod:`plan_bridge.maps`), what it holds, its battery, the open/locked state of the
+hallways and locations of its room that the step is about and of those it stands
+at, and the objects of the spawns it stands at (what pyrobosim's ``detect`` sees
+there, when the location is open) - never the planner's effects read back. What the
+robots saw of the hallways is also what their drives route over
+(:meth:`RobosimWorld.closed_halls`).
 
 **Events** (:mod:`.events`) are applied when the clock passes their time: at each
 action's start and end, and during a drive (which stops where the robot is at that
@@ -35,10 +38,12 @@ from typing import TYPE_CHECKING, Any
 
 from plan_bridge.execution.clock import SimClock
 from plan_bridge.execution.world import Observation
+from plan_bridge.maps.graph import PlaceMap
+from plan_bridge.maps.model import WorldModel
 from plan_bridge.pddl.task import Fact, format_fact, parse_fact
+from plan_bridge.robosim.description import describe_world, robot_place
 from plan_bridge.robosim.events import WorldEvent, check_events
 from plan_bridge.robosim.loading import load_world_file, quiet_stdout
-from plan_bridge.robosim.problem import WorldModel, describe_world
 
 if TYPE_CHECKING:
     from plan_bridge.planning.types import PlanStep
@@ -86,12 +91,25 @@ class RobosimWorld:
         seed: int = 0,
         fail_rate: float = 0.0,
         events: Iterable[WorldEvent] = (),
+        loaded: tuple[Any, WorldModel] | None = None,
     ) -> None:
         if not 0.0 <= fail_rate <= 1.0:
             raise ValueError(f"fail_rate must be between 0 and 1, got {fail_rate}")
         self.path = Path(world_file)
-        self.sim: Any = load_world_file(self.path)
-        self.model: WorldModel = describe_world(self.sim, str(self.path))
+        if loaded is not None:  # the pyrobosim world just loaded for the task, unchanged
+            self.sim, self.model = loaded
+        else:
+            self.sim = load_world_file(self.path)
+            self.model = describe_world(self.sim, str(self.path))
+        #: The map of places the drives route over.
+        self.map = PlaceMap(self.model)
+        #: Whether each hallway is open, as the robots last saw it (the world file's
+        #: state at the start): the routes a drive takes avoid those seen closed.
+        self.seen_open: dict[str, bool] = {
+            hall: self.model.gates[hall].is_open for hall in self.model.halls
+        }
+        #: Each robot's drives: the hallways crossed, in order (for reports and tests).
+        self.crossed: dict[str, list[str]] = {r.name: [] for r in self.sim.robots}
         self.goal = tuple(parse_fact(f) for f in goal)
         self.seed = seed
         self.fail_rate = fail_rate
@@ -142,12 +160,7 @@ class RobosimWorld:
         """Add events (their names are checked against the world: :class:`EventError`);
         a time window is drawn from the run's seed."""
         new = [event.drawn(self.seed) for event in events]
-        check_events(
-            new,
-            self.model.gates,
-            self.model.items,
-            [s.name for s in self.model.spots.values() if s.kind == "spawn"],
-        )
+        check_events(new, self.model.gates, self.model.items, self.spawn_names())
         with self._lock:
             self._pending = sorted([*self._pending, *new], key=lambda e: e.at)
 
@@ -312,24 +325,19 @@ class RobosimWorld:
                 self.faults += 1
         return failed
 
+    def spawn_names(self) -> list[str]:
+        """Every object spawn of the world."""
+        return [spawn for gate in self.model.gates.values() for spawn in gate.spawns]
+
     # -- what a robot sees -----------------------------------------------------------
     def spot_of(self, robot: Any) -> str:
-        """The spot a robot is at (a room's spot when it stands elsewhere in the room)."""
-        from pyrobosim.core.hallway import Hallway
+        """The place a robot is at (the nearest place of its room when it stands between
+        places; of its hallway's doorways in a hallway)."""
+        return robot_place(self.model, robot)
 
-        place = robot.location
-        if isinstance(place, Hallway) and place.name in self.model.hall_ends:
-            pose = robot.get_pose()
-            return min(
-                self.model.hall_ends[place.name],
-                key=lambda s: math.hypot(
-                    self.model.spots[s].x - pose.x, self.model.spots[s].y - pose.y
-                ),
-            )
-        if place is not None and place.name in self.model.spots:
-            return str(place.name)
-        room = getattr(place, "parent", None)  # a location: its room
-        return str(room.name) if room is not None else ""
+    def closed_halls(self) -> set[str]:
+        """The hallways the robots last saw closed (a drive routes round them)."""
+        return {hall for hall, is_open in self.seen_open.items() if not is_open}
 
     def observe(self, robot: Any, about: Iterable[str] = ()) -> list[Observation]:
         """What ``robot`` sees now, of itself and of the things ``about`` names."""
@@ -341,36 +349,50 @@ class RobosimWorld:
         if spot:
             seen[_f("At", me, spot)] = True
         for name in named:
-            if name in model.spots and name != spot:
+            if name in model.places and name != spot:
                 seen[_f("At", me, name)] = False
         held = robot.manipulated_object
         for item in {*(n for n in named if n in model.items), *([held.name] if held else [])}:
             seen[_f("Holding", me, item)] = held is not None and held.name == item
         seen[_f("HandEmpty", me)] = held is None
         seen[_f("battery-level", me)] = round(float(robot.battery_level), 3)
-        room = model.spots[spot].room if spot in model.spots else ""
+        place = model.places.get(spot)
+        room = place.room if place is not None else ""
         gates = {n for n in named if n in model.gates}
-        gates |= {g for n in {*named, spot} if n in model.spots for g in [model.spots[n].gate] if g}
+        gates |= {g for n in {*named, spot} if n in model.places for g in model.places[n].gates}
         for gate in sorted(gates):
             if self._visible(gate, room, spot):
                 entity = self.sim.get_entity_by_name(gate)
                 seen[_f("IsOpen", gate)] = bool(entity.is_open)
                 seen[_f("IsLocked", gate)] = bool(entity.is_locked)
-        place = model.spots.get(spot)
-        if place is not None and place.kind == "spawn":
-            entity = self.sim.get_entity_by_name(spot)
-            if entity is not None and entity.is_open:
-                here = {child.name for child in entity.children}
-                single = place.gate is not None and len(model.gates[place.gate].spawns) == 1
-                for item in model.items:
-                    seen[_f("At", item, spot)] = item in here
-                    if place.gate is not None and (item in here or single):
-                        seen[_f("Has", place.gate, item)] = item in here
+                if gate in self.seen_open:
+                    self.seen_open[gate] = bool(entity.is_open)
+        if place is not None and place.fixture is not None:
+            self._look_at_spawns(place.name, place.spawns, place.fixture, seen)
         return sorted(seen.items(), key=lambda pair: pair[0])
 
+    def _look_at_spawns(
+        self, place: str, spawns: Sequence[str], fixture: str, seen: dict[Fact, bool | float]
+    ) -> None:
+        """The objects on the spawns reached from ``place`` (none when the location is
+        closed: the robot cannot see inside)."""
+        location = self.sim.get_entity_by_name(fixture)
+        if location is None or not location.is_open:
+            return
+        here: set[str] = set()
+        for name in spawns:
+            entity = self.sim.get_entity_by_name(name)
+            if entity is not None:
+                here |= {child.name for child in entity.children}
+        single = len(self.model.gates[fixture].spawns) == 1
+        for item in self.model.items:
+            seen[_f("At", item, place)] = item in here
+            if item in here or single:
+                seen[_f("Has", fixture, item)] = item in here
+
     def _visible(self, gate: str, room: str, spot: str) -> bool:
-        spot_info = self.model.spots.get(spot)
-        if spot_info is not None and spot_info.gate == gate:
+        place = self.model.places.get(spot)
+        if place is not None and gate in place.gates:
             return True
         entity = self.sim.get_entity_by_name(gate)
         if self.model.gates[gate].kind == "hall":
@@ -412,7 +434,8 @@ class RobosimWorld:
             if robot is not None:
                 return self.spot_of(robot) == names[1]
             obj = world.get_object_by_name(names[0])
-            return obj is not None and obj.parent is not None and obj.parent.name == names[1]
+            spawn = obj.parent if obj is not None else None
+            return spawn is not None and self.model.spawn_place(spawn.name) == names[1]
         if name == "holding":
             held = self.robot(args[0]).manipulated_object
             return held is not None and held.name == names[1]

@@ -1,6 +1,6 @@
-"""Goals no run can reach from a pyrobosim world as it is loaded, and why.
+"""Goals no run can reach from a world as it is loaded, and why.
 
-:func:`goal_blockers` is what :func:`~plan_bridge.robosim.problem.parse_goal` asks
+:func:`goal_blockers` is what :func:`~plan_bridge.maps.goals.parse_goal` asks
 before any planning: atoms that contradict each other (a robot at two places, an
 object held by two robots, a hand empty and holding), and atoms the robots cannot
 make true (a lock - no robot action locks -, a place behind closed, locked hallways,
@@ -14,8 +14,9 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 
+from plan_bridge.maps.graph import PlaceMap
+from plan_bridge.maps.model import RobotInfo, WorldModel
 from plan_bridge.pddl.task import Fact
-from plan_bridge.robosim.problem import RobotInfo, WorldModel
 
 __all__ = ["goal_blockers"]
 
@@ -34,7 +35,9 @@ def goal_blockers(model: WorldModel, goal: Sequence[Fact]) -> list[str]:
     reasons = _contradictions(model, goal)
     if reasons:
         return reasons
-    reach = {robot.name: _reachable(model, robot.spot) for robot in model.robots}
+    graph = PlaceMap(model)
+    shut = [hall for hall in model.halls if not _usable(model, hall)]
+    reach = {robot.name: graph.reachable(robot.place, shut) for robot in model.robots}
     items: dict[str, tuple[set[str], set[str]]] = {}
 
     def item(name: str) -> tuple[set[str], set[str]]:
@@ -95,7 +98,7 @@ def _place_clashes(model: WorldModel, wanted: _Wanted) -> Iterable[str]:
         if len(locations) > 1:
             yield f"{obj} cannot be at {' and at '.join(locations)} at once"
         for spawn in wanted.where.get(obj, []):
-            if spawn in model.spots and model.spots[spawn].gate not in locations:
+            if spawn in model.places and model.places[spawn].fixture not in locations:
                 yield f"{obj} cannot be on {spawn} and at {locations[0]} at once"
 
 
@@ -121,48 +124,24 @@ def _usable(model: WorldModel, gate: str | None) -> bool:
     return info is not None and (info.is_open or not info.is_locked)
 
 
-def _reachable(model: WorldModel, start: str) -> set[str]:
-    """The spots a robot at ``start`` can drive to (hallways that are closed and locked
-    excepted; the battery ignored)."""
-    rooms: dict[str, list[str]] = {}
-    for place in model.spots.values():
-        rooms.setdefault(place.room, []).append(place.name)
-    ends: dict[str, list[str]] = {}
-    for hall, (a, b) in model.hall_ends.items():
-        if _usable(model, hall):
-            ends.setdefault(a, []).append(b)
-            ends.setdefault(b, []).append(a)
-    seen = {start}
-    todo = [start]
-    while todo:
-        spot = todo.pop()
-        info = model.spots.get(spot)
-        nearby = rooms.get(info.room, []) if info is not None else []
-        for other in (*nearby, *ends.get(spot, ())):
-            if other not in seen:
-                seen.add(other)
-                todo.append(other)
-    return seen
-
-
 def _item_reach(
     model: WorldModel, item: str, reach: dict[str, set[str]]
 ) -> tuple[set[str], set[str]]:
     """(the spawns ``item`` can be brought to, the robots that can hold it)."""
-    spawn = model.items.get(item)
-    places = {spawn} if spawn is not None else set()
+    start = model.item_place(item)
+    places = {start} if start is not None else set()
     robots = {r.name for r in model.robots if r.holding == item}
     while True:
         takers = {
             r.name
             for r in model.robots
-            if any(s in reach[r.name] and _usable(model, model.spots[s].gate) for s in places)
+            if any(s in reach[r.name] and _usable(model, model.places[s].fixture) for s in places)
         }
         drops = {
             s
             for r in robots | takers
             for s in reach[r]
-            if model.spots[s].kind == "spawn" and _usable(model, model.spots[s].gate)
+            if model.places[s].is_spawn and _usable(model, model.places[s].fixture)
         }
         if takers <= robots and drops <= places:
             return places, robots
@@ -171,12 +150,12 @@ def _item_reach(
 
 
 def _shut_halls(model: WorldModel, reached: Iterable[str]) -> str:
-    """The closed, locked hallways between the spots ``reached`` and the others."""
+    """The closed, locked hallways between the places ``reached`` and the others."""
     inside = set(reached)
     shut = [
-        hall
-        for hall, (a, b) in model.hall_ends.items()
-        if not _usable(model, hall) and (a in inside) != (b in inside)
+        hall.name
+        for hall in model.halls.values()
+        if not _usable(model, hall.name) and (hall.ends[0] in inside) != (hall.ends[1] in inside)
     ]
     if not shut:
         return "no hallway leads there"
@@ -203,7 +182,7 @@ def _robot_at_blocker(model: WorldModel, args: list[str], reach: _Reach, item: _
     if args[1] in reach[robot.name]:
         return ""
     way = _shut_halls(model, reach[robot.name])
-    return f"{robot.name} cannot get from {robot.spot} to {args[1]}: {way}"
+    return f"{robot.name} cannot get from {robot.place} to {args[1]}: {way}"
 
 
 def _robot(model: WorldModel, name: str) -> RobotInfo:
@@ -215,13 +194,13 @@ def _object_at_blocker(model: WorldModel, args: list[str], reach: _Reach, item: 
     places, _ = item(obj)
     if spawn in places:
         return ""
-    return _placement_blocker(model, obj, spawn, model.spots[spawn].gate, reach)
+    return _placement_blocker(model, obj, spawn, model.places[spawn].fixture, reach)
 
 
 def _has_blocker(model: WorldModel, args: list[str], reach: _Reach, item: _ItemReach) -> str:
     location, obj = args
     places, _ = item(obj)
-    if places & {s for s in model.gates[location].spawns if s in model.spots}:
+    if places & set(model.spawn_places(location)):
         return ""
     return _placement_blocker(model, obj, location, location, reach)
 
@@ -244,7 +223,7 @@ def _holding_blocker(model: WorldModel, args: list[str], reach: _Reach, item: _I
 def _hand_empty_blocker(model: WorldModel, args: list[str], reach: _Reach, item: _ItemReach) -> str:
     robot = _robot(model, args[0])
     if robot.holding is None or any(
-        model.spots[s].kind == "spawn" and _usable(model, model.spots[s].gate)
+        model.places[s].is_spawn and _usable(model, model.places[s].fixture)
         for s in reach[robot.name]
     ):
         return ""
@@ -257,7 +236,7 @@ def _open_blocker(model: WorldModel, args: list[str], reach: _Reach, item: _Item
         return ""
     if info.is_locked:
         return f"{info.name} is {_SHUT}"
-    spots = {s.name for s in model.spots.values() if s.gate == info.name}
+    spots = set(model.gate_places(info.name))
     if any(spots & reach[r] for r in reach):
         return ""
     return f"no robot can get to {info.name}: {_shut_halls(model, _anyone(reach))}"
@@ -274,9 +253,9 @@ def _locked_blocker(model: WorldModel, args: list[str], reach: _Reach, item: _It
 
 
 def _searched_blocker(model: WorldModel, args: list[str], reach: _Reach, item: _ItemReach) -> str:
-    spot = model.spots[args[0]]
-    if not _usable(model, spot.gate):
-        return f"{args[0]} cannot be searched: {spot.gate} is {_SHUT}"
+    spot = model.places[args[0]]
+    if not _usable(model, spot.fixture):
+        return f"{args[0]} cannot be searched: {spot.fixture} is {_SHUT}"
     if any(args[0] in reach[r] for r in reach):
         return ""
     return f"no robot can get to {args[0]}: {_shut_halls(model, _anyone(reach))}"
@@ -295,18 +274,18 @@ _BLOCKERS: dict[str, Callable[[WorldModel, list[str], _Reach, _ItemReach], str]]
 
 
 def _anyone(reach: dict[str, set[str]]) -> set[str]:
-    """The spots some robot can get to."""
+    """The places some robot can get to."""
     return set().union(*reach.values())
 
 
 def _why_stuck(model: WorldModel, obj: str, target: str, reach: dict[str, set[str]]) -> str:
     """Why ``obj`` cannot be brought to ``target`` (a spawn, a location or a robot)."""
-    spawn = model.items.get(obj)
+    spawn = model.item_place(obj)
     if spawn is None:
         holder = next((r.name for r in model.robots if r.holding == obj), "")
         way = _shut_halls(model, reach.get(holder, ()))
         return f"{holder} holds {obj} and cannot get to {target}: {way}"
-    gate = model.spots[spawn].gate if spawn in model.spots else None
+    gate = model.places[spawn].fixture
     if not _usable(model, gate):
         return f"{obj} is in {gate}, which is {_SHUT}: no robot can take it out"
     if not any(spawn in reach[r.name] for r in model.robots):
@@ -314,6 +293,3 @@ def _why_stuck(model: WorldModel, obj: str, target: str, reach: dict[str, set[st
     takers = set().union(*(reach[r.name] for r in model.robots if spawn in reach[r.name]))
     way = _shut_halls(model, takers)
     return f"no robot that can get to {obj} on {spawn} can bring it to {target}: {way}"
-
-
-# -- the problem -----------------------------------------------------------------------

@@ -1,18 +1,21 @@
-; A mobile manipulator in a pyrobosim world (plan_bridge.robosim). The problem is
-; generated from the world file; goals use pyrobosim's task-planning vocabulary
-; (At, Holding, HandEmpty, IsOpen, IsLocked, Has) with the world's entity names.
+; Mobile robots on a map (plan_bridge.maps): the task level of a building. The problem
+; is generated from a world's map, the belief and a goal (plan_bridge/maps/tasks.py);
+; goals use pyrobosim's task-planning vocabulary (At, Holding, HandEmpty, IsOpen,
+; IsLocked, Has) with the world's names.
 ;
-; Spots are where a robot can stand: a room's navigation pose (area), an object spawn
-; of a location (spawn) and each end of a hallway (door, one per room it joins).
-; A robot drives between spots of one room (navigate) and through an open hallway
-; from one of its ends to the other (cross); durations are distance / speed, and
-; driving drains the battery by (drain-per-metre ?r) per metre. Chargers recharge it.
-; Gates open, close and lock: hallways (hall) and pyrobosim locations (fixture).
+; Spots are the places a task needs: where the robots are, where the objects of the
+; goal lie and go, chargers, and the doorways of hallways that are closed but may be
+; opened. Two spots joined by a route over open hallways are one navigate apart (its
+; duration is the route's length over the robot's speed, the route is the map's: the
+; skill drives it); a closed hallway is crossed from one doorway to the other once a
+; robot has opened it. Driving drains the battery by (drain-per-metre ?r) per metre;
+; chargers recharge it. Gates open, close and lock: hallways (hall) and pyrobosim
+; locations (fixture).
 (define (domain robosim)
   (:requirements :strips :typing :durative-actions :numeric-fluents)
   (:types
     bot item - thing
-    area spawn door - spot
+    spot
     hall fixture - gate)
   (:predicates
     (At ?x - thing ?s - spot)
@@ -21,11 +24,11 @@
     (IsOpen ?g - gate)
     (IsLocked ?g - gate)
     (Has ?l - fixture ?o - item)
-    (Searched ?s - spawn)
+    (Searched ?s - spot)
     (bot-ready ?r - bot)
-    (same-room ?a ?b - spot)
-    (hall-ends ?a ?b - door ?h - hall)
-    (spawn-of ?s - spawn ?l - fixture)
+    (route ?a ?b - spot)
+    (hall-ends ?a ?b - spot ?h - hall)
+    (spawn-of ?s - spot ?l - fixture)
     (reaches-gate ?s - spot ?g - gate)
     (is-charger ?l - fixture))
   (:functions
@@ -39,7 +42,7 @@
     :duration (= ?duration (/ (metres ?from ?to) (top-speed ?r)))
     :condition (and (at start (bot-ready ?r))
                     (at start (At ?r ?from))
-                    (at start (same-room ?from ?to))
+                    (at start (route ?from ?to))
                     (at start (>= (battery-level ?r) (* (drain-per-metre ?r) (metres ?from ?to)))))
     :effect (and (at start (not (bot-ready ?r)))
                  (at start (not (At ?r ?from)))
@@ -48,7 +51,7 @@
                  (at end (decrease (battery-level ?r) (* (drain-per-metre ?r) (metres ?from ?to))))))
 
   (:durative-action cross
-    :parameters (?r - bot ?from ?to - door ?h - hall)
+    :parameters (?r - bot ?from ?to - spot ?h - hall)
     :duration (= ?duration (/ (metres ?from ?to) (top-speed ?r)))
     :condition (and (at start (bot-ready ?r))
                     (at start (At ?r ?from))
@@ -62,7 +65,7 @@
                  (at end (decrease (battery-level ?r) (* (drain-per-metre ?r) (metres ?from ?to))))))
 
   (:durative-action pick
-    :parameters (?r - bot ?o - item ?s - spawn ?l - fixture)
+    :parameters (?r - bot ?o - item ?s - spot ?l - fixture)
     :duration (= ?duration 2)
     :condition (and (at start (bot-ready ?r))
                     (over all (At ?r ?s))
@@ -79,7 +82,7 @@
                  (at end (bot-ready ?r))))
 
   (:durative-action place
-    :parameters (?r - bot ?o - item ?s - spawn ?l - fixture)
+    :parameters (?r - bot ?o - item ?s - spot ?l - fixture)
     :duration (= ?duration 2)
     :condition (and (at start (bot-ready ?r))
                     (over all (At ?r ?s))
@@ -121,7 +124,7 @@
                  (at end (bot-ready ?r))))
 
   (:durative-action detect
-    :parameters (?r - bot ?s - spawn ?l - fixture)
+    :parameters (?r - bot ?s - spot ?l - fixture)
     :duration (= ?duration 1)
     :condition (and (at start (bot-ready ?r))
                     (over all (At ?r ?s))
@@ -133,7 +136,7 @@
                  (at end (bot-ready ?r))))
 
   (:durative-action charge
-    :parameters (?r - bot ?s - spawn ?l - fixture)
+    :parameters (?r - bot ?s - spot ?l - fixture)
     :duration (= ?duration 10)
     :condition (and (at start (bot-ready ?r))
                     (over all (At ?r ?s))
