@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -103,3 +104,72 @@ def doors(tmp_path: Path):  # type: ignore[no-untyped-def]
 def doors_text() -> tuple[str, str]:
     """(domain text, problem template with {goal} and {extra} placeholders)."""
     return DOORS_DOMAIN, DOORS_PROBLEM
+
+
+def map_house(
+    *, hall_open: bool = True, desk_locked: bool = False, holding: str | None = None
+) -> Any:
+    """A world model built by hand (no pyrobosim): two rooms joined by a hallway, a desk
+    (one spawn) in the kitchen, a shelf in the bedroom; a robot in the kitchen, an apple
+    on the desk, a pear on the shelf."""
+    from plan_bridge.maps.model import Gate, Hall, Place, RobotInfo, WorldModel
+
+    places = {
+        "kitchen": Place("kitchen", 0.0, 0.0, "kitchen", aliases=("kitchen",)),
+        "bedroom": Place("bedroom", 10.0, 0.0, "bedroom", aliases=("bedroom",)),
+        "corridor_door_kitchen": Place(
+            "corridor_door_kitchen",
+            4.0,
+            0.0,
+            "kitchen",
+            doors=("corridor",),
+            aliases=("corridor_door_kitchen",),
+        ),
+        "corridor_door_bedroom": Place(
+            "corridor_door_bedroom",
+            6.0,
+            0.0,
+            "bedroom",
+            doors=("corridor",),
+            aliases=("corridor_door_bedroom",),
+        ),
+        "desk_top": Place(
+            "desk_top", 1.0, 1.0, "kitchen", ("desk_top",), "desk", aliases=("desk_top",)
+        ),
+        "shelf_top": Place(
+            "shelf_top", 9.0, 1.0, "bedroom", ("shelf_top",), "shelf", aliases=("shelf_top",)
+        ),
+    }
+    gates = {
+        "corridor": Gate("corridor", "hall", hall_open, not hall_open),
+        "desk": Gate("desk", "fixture", not desk_locked, desk_locked, spawns=("desk_top",)),
+        "shelf": Gate("shelf", "fixture", True, False, spawns=("shelf_top",)),
+    }
+    halls = {
+        "corridor": Hall(
+            "corridor",
+            ("corridor_door_kitchen", "corridor_door_bedroom"),
+            ("kitchen", "bedroom"),
+            2.0,
+            ((4.0, 0.0), (6.0, 0.0)),
+        )
+    }
+    kinds = {"kitchen": "room", "bedroom": "room", "desk_top": "spawn", "shelf_top": "spawn"}
+    kinds |= {"corridor_door_kitchen": "door", "corridor_door_bedroom": "door"}
+    return WorldModel(
+        "house",
+        (RobotInfo("robot", "kitchen", 90.0, 1.0, 0.5, holding),),
+        places,
+        gates,
+        halls,
+        {"apple": None if holding == "apple" else "desk_top", "pear": "shelf_top"},
+        {"apple": "apple", "pear": "pear"},
+        {name: name for name in places},
+        kinds,
+    )
+
+
+@pytest.fixture
+def house() -> Any:
+    """:func:`map_house`: call it with its options."""
+    return map_house

@@ -67,6 +67,9 @@ class ProblemSpec:
     search: str = ""
     """The Kairos search preset that suits problems of this kind, tried first (see
     :mod:`plan_bridge.planning.kairos_direct`); "" for Kairos' own choice."""
+    makespan_s: float = 0.0
+    """When above 0: the problem's metric is to minimise the makespan (``total-time``),
+    and Kairos may spend this many seconds improving its first plan."""
 
     @cached_property
     def key(self) -> str:
@@ -86,6 +89,7 @@ class ProblemSpec:
         return {
             "name": self.name,
             "search": self.search,
+            "makespan_s": self.makespan_s,
             "objects": [list(pair) for pair in self.objects],
             "init": [list(atom) for atom in self.init],
             "values": [[*atom, value] for atom, value in self.values],
@@ -104,6 +108,7 @@ class ProblemSpec:
             ),
             tuple(tuple(str(w) for w in atom) for atom in data["goal"]),
             search=str(data.get("search", "")),
+            makespan_s=float(data.get("makespan_s", 0.0)),
         )
 
     def with_state(
@@ -125,6 +130,7 @@ class ProblemSpec:
             self.goal if goal is None else tuple(goal),
             self.comment,
             self.search,
+            self.makespan_s,
         )
 
     # -- text ----------------------------------------------------------------------
@@ -139,12 +145,13 @@ class ProblemSpec:
         init = "\n    ".join([*facts, *numbers])
         goal = " ".join(_atom(a) for a in self.goal)
         head = f"; {self.comment}\n" if self.comment else ""
+        metric = "\n  (:metric minimize (total-time))" if self.makespan_s > 0 else ""
         return (
             f"{head}(define (problem {self.name})\n"
             f"  (:domain {self.domain_name})\n"
             f"  (:objects\n    {objects})\n"
             f"  (:init\n    {init})\n"
-            f"  (:goal (and {goal})))\n"
+            f"  (:goal (and {goal})){metric})\n"
         )
 
     # -- unified-planning ------------------------------------------------------------
@@ -181,6 +188,10 @@ class ProblemSpec:
             problem.set_initial_value(exp, number)
         for atom in self.goal:
             problem.add_goal(expression(atom))
+        if self.makespan_s > 0:
+            from unified_planning.model.metrics import MinimizeMakespan  # type: ignore[import-untyped]
+
+            problem.add_quality_metric(MinimizeMakespan(environment=problem.environment))
         return problem
 
 

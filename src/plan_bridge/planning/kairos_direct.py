@@ -87,7 +87,10 @@ def solve_with_kairos(base: _Source, request: dict[str, Any]) -> dict[str, Any] 
     deadline = started + (float(limit) if limit is not None else _NO_KAIROS_TIMEOUT_S)
     params = dict(request.get("params") or {})
     preset = base.spec.search if base.spec is not None and "search" not in params else ""
-    if preset:
+    if base.spec is not None and base.spec.makespan_s > 0:
+        # A metric: improve the first plan for a moment, no longer (Kairos would go on
+        # until the time limit, or a proof that no plan is shorter).
+        deadline = min(deadline, started + base.spec.makespan_s)
         # The preset that suits this kind of problem first, on a share of the time;
         # Kairos' own choice after it, if it finds no plan.
         share = min(_PRESET_SHARE * (deadline - started), _PRESET_MAX_S)

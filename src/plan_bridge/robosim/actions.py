@@ -214,6 +214,8 @@ def act(
         return ActionResult("CANCELED", f"{action} preempted")
     if action == "charge":
         result = _charge(world, robot, args)
+    elif action in ("open", "close") and world.name(args[1]) in world.model.halls:
+        result = _check_place(world, robot, action, args) or _door(world, robot, action, args)
     else:
         task = TaskAction(action, robot=robot.name)
         if action == "pick":
@@ -263,6 +265,27 @@ def _charge(world: RobosimWorld, robot: Any, args: list[str]) -> ActionResult:
         return ActionResult("EXECUTION_FAILURE", "Simulated charging failure.")
     world.recharge(robot)
     return ActionResult("SUCCESS")
+
+
+def _door(world: RobosimWorld, robot: Any, action: str, args: list[str]) -> ActionResult:
+    """Open or close a hallway from its doorway. (pyrobosim's robot opens a hallway
+    only from where pyrobosim puts its ends, which for ``auto`` hallways is the room's
+    centre: the world opens it, with the robot's own fault draw.)"""
+    hall = world.name(args[1])
+    if robot.manipulated_object is not None:  # as pyrobosim's robot says it
+        return ActionResult(
+            "PRECONDITION_FAILURE", f"Robot is holding an object. Cannot {action}."
+        )
+    if world.draw_fault(robot, action):
+        return ActionResult("EXECUTION_FAILURE", f"Simulated {action} failure.")
+    call = world.sim.open_location if action == "open" else world.sim.close_location
+    with world.quietly():
+        result = ActionResult.of(call(hall))
+    if result.status == "SUCCESS":
+        for other in world.sim.robots:
+            other.update_polygons()
+    world.seen_open[hall] = bool(world.sim.get_hallway_by_name(hall).is_open)
+    return result
 
 
 def _fixture(world: RobosimWorld, place: str) -> str | None:

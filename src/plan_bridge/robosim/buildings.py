@@ -93,7 +93,7 @@ def world_data(spec: Building) -> dict[str, Any]:
             "name": "charger",
             "category": "charger",
             "parent": spec.room(0),
-            "pose": {"position": {"x": x - spec.room_m / 2 + 0.5, "y": y + spec.room_m / 2 - 0.4}},
+            "pose": {"position": {"x": x + spec.room_m / 2 - 0.5, "y": y + spec.room_m / 2 - 0.4}},
             "is_charger": True,
         }
     )

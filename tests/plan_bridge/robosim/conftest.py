@@ -16,7 +16,7 @@ def test_world_file() -> Path:
 
 @pytest.fixture(scope="session")
 def test_world_model(test_world_file: Path):  # type: ignore[no-untyped-def]
+    from plan_bridge.robosim.description import describe_world
     from plan_bridge.robosim.loading import load_world_file
-    from plan_bridge.robosim.problem import describe_world
 
     return describe_world(load_world_file(test_world_file))
