@@ -254,7 +254,7 @@ class Concurrence(Container):
                 try:
                     outcome = child.state.execute(child.remapper)  # type: ignore[assignment]
                 except Exception as exc:
-                    raise self._child_error(label, child.state, exc) from exc
+                    self._raise_child_error(label, child.state, exc)
         except Exception as error:
             self._child_failed(run, error)
             return

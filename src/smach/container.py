@@ -35,7 +35,7 @@ from __future__ import annotations
 import contextlib
 import threading
 from collections.abc import Iterable, Iterator, Mapping, Sequence
-from typing import Any, ClassVar, TypeVar
+from typing import Any, ClassVar, NoReturn, TypeVar
 
 from smach.construction import _construction, _label_problem, construction_method
 from smach.container_checks import ContainerChecks
@@ -509,7 +509,7 @@ class Container(ContainerEvents, ContainerChecks, ContainerScope, State):
         except Exception as exc:
             if control is not None:
                 control.leave(path, state, None)
-            raise self._child_error(label, state, exc) from exc
+            self._raise_child_error(label, state, exc)
         if control is not None:  # a forced outcome replaces the returned one
             outcome = control.leave(path, state, outcome)
         if check and outcome not in state._outcomes:
@@ -541,6 +541,15 @@ class Container(ContainerEvents, ContainerChecks, ContainerScope, State):
             f"state {self._path}/{label} ({type(state).__name__}) raised "
             f"{type(exc).__name__}: {exc}"
         )
+
+    def _raise_child_error(self, label: str, state: State, exc: Exception) -> NoReturn:
+        """Raise what a step of the child ``label`` raises for ``exc`` (in the ``except``
+        clause that caught it): ``exc`` itself when it already says where it happened
+        (with its own cause), else the :meth:`_child_error` wrapper, caused by ``exc``."""
+        error = self._child_error(label, state, exc)
+        if error is exc:
+            raise exc
+        raise error from exc
 
     def _bad_outcome(self, label: str, state: State, outcome: object) -> InvalidUserCodeError:
         declared = ", ".join(state.get_registered_outcomes()) or "none"

@@ -172,7 +172,7 @@ class Iterator(Container):
                 try:
                     outcome = state.execute(remapper)
                 except Exception as exc:
-                    raise self._child_error(label, state, exc) from exc
+                    self._raise_child_error(label, state, exc)
                 if outcome not in outcomes:
                     raise self._bad_outcome(label, state, outcome)
             self._index += 1

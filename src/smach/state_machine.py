@@ -15,7 +15,7 @@ from __future__ import annotations
 import threading
 import time
 from collections.abc import Iterable, Mapping, Sequence
-from typing import Any
+from typing import Any, ClassVar, NoReturn
 
 import smach
 from smach.container import Container, construction_method
@@ -47,7 +47,7 @@ _KEY_LISTS_MAX = 1024
 class _Slot:
     """A compiled child: everything one step of the loop needs."""
 
-    __slots__ = ("constants", "label", "next", "path", "remapper", "state")
+    __slots__ = ("constants", "inline", "label", "next", "path", "remapper", "state")
 
     def __init__(
         self, label: str, state: State, remapper: Remapper, constants: dict[str, Any], path: str
@@ -58,10 +58,34 @@ class _Slot:
         self.constants = constants or None  # None: nothing to write (one test per step)
         self.path = path  # the child's path in events (slots are recompiled on adoption)
         self.next: dict[str, _Slot | str] = {}
+        # The child itself when its runs are taken inline by the parent's loop (a plain
+        # StateMachine: see StateMachine.run_children), else None.
+        self.inline: StateMachine | None = (
+            state if isinstance(state, StateMachine) and state._runs_inline else None
+        )
+
+
+# A machine above the one running, in a loop that runs its children inline: the machine,
+# the step it is in (its slot) and that step's loop variables (held captures, log,
+# log_steps).
+_Level = tuple["StateMachine", _Slot, tuple[Capture, ...], bool, bool]
 
 
 class StateMachine(Container):
     """A container that runs its children one at a time, following transitions."""
+
+    #: Whether a parent StateMachine runs this machine's runs in its own loop instead
+    #: of calling ``execute`` (see ``run_children``): true unless the class replaces
+    #: ``execute`` or ``run_children`` or wants its outcomes checked.
+    _runs_inline: ClassVar[bool] = True
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        cls._runs_inline = (
+            cls.execute is Container.execute
+            and cls.run_children is StateMachine.run_children
+            and cls._outcome_checked
+        )
 
     # Every target the table can return was checked to be an outcome of the machine.
     _outcome_checked = True
@@ -278,7 +302,21 @@ class StateMachine(Container):
         has a preempt request to pass on goes through :meth:`Container.step_child`;
         an unwatched one calls the child directly, which is all ``step_child`` would
         do for it.
+
+        An unwatched child that is a plain StateMachine (``_runs_inline``) is not
+        called: this loop takes its run over. :meth:`_enter_inline` does what
+        ``Container.execute`` does before ``run_children()``, the loop goes on with
+        the child's slots (its parent's loop variables kept on ``above``), and when
+        the child ends, :meth:`_leave_inline` does what its ``run_children()`` and
+        ``execute`` do at the end, and the parent's step goes on with the outcome.
+        So a tree of nested machines runs in this one frame whatever its depth.
+        (CPython 3.11 keeps frames in 16 KiB chunks and frees a chunk as soon as the
+        frame at its base returns: a run two frames per level deep crossed a chunk
+        boundary on every execution, an ``mmap``, a ``munmap`` and page faults each
+        time, more of them where calls were made right at the boundary, depending on
+        how deep the caller's stack was: see docs/performance.md.)
         """
+        sm = self
         slot = self._slots[1]  # type: ignore[index]  # (compiled before every run)
         label = ""
         # With capture listeners only, the state_exited + transition of a step are held
@@ -286,67 +324,218 @@ class StateMachine(Container):
         # thread) and the three go out in one call (see step_child's ``pending``).
         pending: tuple[Capture, ...] = ()
         bus = self._rt.bus
-        # Read once per run: the thread's name (set by execute() when somebody
-        # listens; every event of this loop is emitted from it) and whether INFO lines
-        # are wanted (decided once per top-level run).
-        thread = self._thread
+        # Whether INFO lines are wanted (decided once per top-level run).
         log = self._log_info
         # Log lines alone take a step through step_child only if this machine writes
         # a line when a state is entered (StateMachine writes none, as the original).
         log_steps = log and self._logs_entries
         watched: object = False
+        # The machines above the one running (children run inline), innermost last.
+        above: list[_Level] = []
+        ascending = False  # (the machine running has ended, with ``result``)
+        outcome: Any = None
+        result: str | None = None
         if self._preempted_state is not None:
             self._preempted_state = None
         try:
-            if smach.is_shutdown is not _never and smach.is_shutdown():
-                return None
             while True:
-                label = slot.label
-                self._current_slot = slot  # publish before reading the flag (see module doc)
-                if slot.constants:
-                    self._userdata._data.update(slot.constants)
-                watched = bus.listeners or self._local
-                if watched or log_steps or self._preempt_requested:
-                    if thread is None and watched:
-                        thread = _current_thread().name
-                    held, pending = pending, ()  # (step_child sends them, even if it raises)
-                    # Typed str: anything else fails the lookup below and is reported.
-                    outcome = self.step_child(
-                        label, slot.state, slot.remapper, thread, held, check=False,
-                        report_exit=False,
-                    )  # fmt: skip
+                if ascending:  # the machine running ended: its run ends, its parent goes on
+                    held, pending = pending, ()  # (sent by the call that takes them)
+                    if not above:
+                        return sm._end_loop(slot, outcome, result, held, watched)
+                    sm._leave_inline(slot, outcome, result, held, watched, above[-1][1].remapper)
+                    sm, slot, pending, log, log_steps = above.pop()
+                    label = slot.label
+                    outcome = result
+                    ascending = watched = False  # (a child is run inline only unwatched)
+                # The default check never says yes; skip the call unless replaced.
+                elif smach.is_shutdown is not _never and smach.is_shutdown():
+                    result = None  # (the run stops before its next state)
+                    ascending = True
+                    continue
                 else:
-                    try:
-                        outcome = slot.state.execute(slot.remapper)  # type: ignore[assignment]
-                    except Exception as exc:
-                        raise self._child_error(label, slot.state, exc) from exc
+                    label = slot.label
+                    sm._current_slot = slot  # publish before reading the flag (see module doc)
+                    if slot.constants:
+                        sm._userdata._data.update(slot.constants)
+                    watched = bus.listeners or sm._local
+                    if watched or log_steps or sm._preempt_requested:
+                        held, pending = pending, ()  # (step_child sends them, even if it raises)
+                        # Typed str: anything else fails the lookup below and is reported.
+                        outcome = sm.step_child(
+                            label, slot.state, slot.remapper, sm._thread, held, check=False,
+                            report_exit=False,
+                        )  # fmt: skip
+                    elif slot.inline is not None:  # a plain StateMachine: run it here
+                        child = slot.inline
+                        child._enter_inline(sm, label, slot.remapper)
+                        above.append((sm, slot, pending, log, log_steps))
+                        sm, slot, pending = child, child._slots[1], ()  # type: ignore[index]
+                        log = child._log_info
+                        log_steps = log and child._logs_entries
+                        continue
+                    else:
+                        try:
+                            outcome = slot.state.execute(slot.remapper)
+                        except Exception as exc:
+                            sm._raise_child_error(label, slot.state, exc)
                 try:
                     target = slot.next[outcome]
                 except (KeyError, TypeError):
-                    self._no_transition(slot, outcome)  # (returns on shutdown)
-                    return None
-                if target.__class__ is not _Slot:
-                    break
+                    sm._no_transition(slot, outcome)  # (returns on shutdown)
+                    result = None
+                    ascending = True
+                    continue
+                if target.__class__ is not _Slot:  # a container outcome: this machine ends
+                    result = target  # type: ignore[assignment]
+                    ascending = True
+                    continue
                 if watched:
-                    pending = self._report_step(slot, outcome, target, thread)
+                    pending = sm._report_step(slot, outcome, target, sm._thread)
                 elif log:  # (the line of _log_transition, without a call per transition)
                     smach.loginfo(
                         f"State machine transitioning '{label}':'{outcome}'-->'{target.label}'"
                     )
-                # The default check never says yes; skip the call unless replaced.
-                if smach.is_shutdown is not _never and smach.is_shutdown():
-                    return None
                 slot = target
-            if pending or watched or self._preempt_requested:
-                pending = self._end_run(slot, outcome, thread, pending)
-            else:  # (what _end_run comes to when nobody watches and nothing is pending)
-                self._last_exit = (label, outcome)
-            # Not a slot, so a container outcome (a str).
-            return target  # type: ignore[return-value]
+        except BaseException as exc:
+            self._unwind(exc, above, sm, pending)
+
+    def _end_loop(
+        self,
+        slot: _Slot,
+        outcome: str,
+        result: str | None,
+        pending: tuple[Capture, ...],
+        watched: object,
+    ) -> str | None:
+        """The end of this machine's loop: its last state ``slot`` returned ``outcome``
+        and the run ends with ``result`` (``None``: smach is shutting down). Reports the
+        last exit (when ``result`` is a container outcome), sends ``pending``."""
+        try:
+            if result is not None:
+                if pending or watched or self._preempt_requested:
+                    pending = self._end_run(slot, outcome, self._thread, pending)
+                else:  # (what _end_run comes to when nobody watches and nothing is pending)
+                    self._last_exit = (slot.label, outcome)
         finally:
             if pending:
                 self._release(pending)
             self._current_slot = None
+        return result
+
+    def _enter_inline(self, parent: StateMachine, label: str, parent_ud: UserData) -> None:
+        """``parent``'s loop takes this machine's run over (child ``label``, given
+        ``parent_ud``): what ``Container.execute`` does up to ``run_children()``, and the
+        start of that. An error is raised as ``parent``'s step of a called child would."""
+        try:
+            if self._stale:
+                self._prepare()
+            if self._running:
+                raise InvalidStateError(f"{self._path} is already running (in another thread?)")
+        except Exception as exc:
+            parent._raise_child_error(label, self, exc)
+        self._running = True
+        try:
+            if self._copies_in:
+                self._copy_input_keys(parent_ud)
+            self._log_info = self._rt.log_info
+            if self._rt.bus.listeners or self._local:
+                self._thread = _current_thread().name
+                self._emit_started(self._start_states(), self._thread)
+            else:
+                self._thread = None
+                if self._log_info:
+                    self._log_started()
+            if self._preempted_state is not None:
+                self._preempted_state = None
+        except BaseException as exc:
+            self._fail_inline(exc, parent, label)
+            raise
+
+    def _leave_inline(
+        self,
+        slot: _Slot,
+        outcome: str,
+        result: str | None,
+        pending: tuple[Capture, ...],
+        watched: object,
+        parent_ud: UserData,
+    ) -> None:
+        """This machine's run, taken over by its parent's loop (which gave it
+        ``parent_ud``), ended with ``result``: what its ``run_children()`` does then
+        (:meth:`_end_loop`, written out here: one call less per level) and the end of
+        ``Container.execute``. An error goes to the parent's loop, whose ``_unwind``
+        finishes this run if ``_running`` says it has not been finished."""
+        try:
+            if result is not None:
+                if pending or watched or self._preempt_requested:
+                    pending = self._end_run(slot, outcome, self._thread, pending)
+                else:
+                    self._last_exit = (slot.label, outcome)
+        finally:
+            if pending:
+                self._release(pending)
+            self._current_slot = None
+        if result is not None:
+            if self._rt.bus.listeners or self._local:
+                self._emit_terminated(self._terminal_states(), result, self._thread)
+            elif self._log_info:
+                self._log_terminated(result)
+            if self._copies_out:
+                self._copy_output_keys(parent_ud)
+        self._running = False
+        if self._rt.preempt_seen:
+            self._after_run()
+
+    def _fail_inline(self, exc: BaseException, parent: StateMachine, label: str) -> None:
+        """``exc`` ends this machine's run taken over by ``parent``'s loop: the error
+        event and the end of the run (``Container.execute``'s ``except`` and
+        ``finally``), then, for an ``Exception``, ``parent``'s step raises it (or its
+        wrapper) as for a called child. (A ``BaseException`` goes on as it is.)"""
+        try:
+            try:
+                if isinstance(exc, Exception):
+                    self._emit_error(exc)
+            finally:
+                self._running = False
+                if self._rt.preempt_seen:
+                    self._after_run()
+        except BaseException as late:  # (raised while ending the run: it goes on instead)
+            exc = late
+        if isinstance(exc, Exception):
+            parent._raise_child_error(label, self, exc)
+
+    def _unwind(
+        self,
+        exc: BaseException,
+        above: list[_Level],
+        sm: StateMachine,
+        pending: tuple[Capture, ...],
+    ) -> NoReturn:
+        """``exc`` left the loop while it ran ``sm`` (this machine, or one run inline
+        below it, ``above`` holding the machines in between): do what the frames of
+        the nested calls would have done, innermost first, and raise what this
+        machine's loop raises. For each machine: the loop's ``finally`` (``pending``
+        sent); below this one, the end of its run (:meth:`_fail_inline`) unless it
+        was over (``_running`` cleared: the error came from its last step), and its
+        parent's step raising what it raised."""
+        while True:
+            try:
+                if pending:
+                    sm._release(pending)
+            finally:
+                sm._current_slot = None
+            if not above:
+                raise exc  # (its cause as the frames would have set it)
+            child = sm
+            sm, slot, pending = above.pop()[:3]
+            try:
+                if child._running:
+                    child._fail_inline(exc, sm, slot.label)
+                elif isinstance(exc, Exception):
+                    sm._raise_child_error(slot.label, child, exc)
+            except BaseException as raised:  # (what the parent's step raises)
+                exc = raised
 
     def _end_run(
         self, slot: _Slot, outcome: str, thread: str | None, pending: tuple[Capture, ...]
@@ -382,6 +571,8 @@ class StateMachine(Container):
         elif bus.sinks:
             t = _monotonic()
             label = slot.label
+            if thread is None:  # (a listener came during a run that started unwatched)
+                thread = _current_thread().name
             held = (
                 (StateExited, slot.path, t, thread, label, outcome),
                 (Transition, self._path, t, thread, label, outcome, target.label),

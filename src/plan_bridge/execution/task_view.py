@@ -17,13 +17,10 @@ gives the planner only those of the task's objects.
 from __future__ import annotations
 
 from collections.abc import Collection, Mapping, Sequence
-from typing import TYPE_CHECKING, Protocol, runtime_checkable
+from typing import Protocol, runtime_checkable
 
 from plan_bridge.execution.world import FactSnapshot, WorldState, values_of
 from plan_bridge.pddl.task import Fact, PlanningTask
-
-if TYPE_CHECKING:
-    from plan_bridge.planning.types import Planner
 
 __all__ = ["TaskView", "adopt_map_atoms", "project"]
 
@@ -45,11 +42,6 @@ class TaskView(Protocol):
     def task_for(self, facts: FactSnapshot, goal: Sequence[Fact]) -> PlanningTask:
         """The task for the belief ``facts`` and the goal atoms ``goal``: the same task
         object as before when nothing it holds changed."""
-        ...
-
-    def planner(self, inner: Planner) -> Planner:
-        """The planner that plans this view's tasks with ``inner`` (e.g. one that
-        shares the goals out to a fleet's robots); ``inner`` itself when none."""
         ...
 
 

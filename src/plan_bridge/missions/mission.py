@@ -36,6 +36,7 @@ from plan_bridge.skills.registry import SkillRegistry
 if TYPE_CHECKING:
     from plan_bridge.execution.task_view import TaskView
     from plan_bridge.execution.world import World, WorldState
+    from plan_bridge.planning.types import Planner
     from plan_bridge.planning.worker import WorkerPool
 
 __all__ = [
@@ -66,6 +67,9 @@ class MissionSetup:
     task_view: TaskView | None = None
     """Makes the task to plan from the belief (a world with a map:
     :mod:`plan_bridge.execution.task_view`); None: the target's task throughout."""
+    planner_for: Callable[[Planner], Planner] | None = None
+    """Wraps the planner of the run (a fleet's: one that shares the goal out to the
+    robots); None: the planner as chosen."""
     extra: dict[str, Any] = field(default_factory=dict)
 
 

@@ -227,8 +227,8 @@ def prepare_mission(
     if problems:
         raise MissionError("the skills do not fit the domain:\n  " + "\n  ".join(problems))
     chosen = planner if planner is not None else get_planner(options.planner)
-    if setup.task_view is not None:
-        chosen = setup.task_view.planner(chosen)
+    if setup.planner_for is not None:
+        chosen = setup.planner_for(chosen)
     executive = Executive(
         target.task,
         setup.skills,

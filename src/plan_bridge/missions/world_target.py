@@ -22,10 +22,12 @@ from __future__ import annotations
 import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from plan_bridge.errors import PlanBridgeError
+from plan_bridge.fleet.planner import FleetPlanner
 from plan_bridge.missions.mission import MissionSetup, Target, TargetError, load_domain_module
 from plan_bridge.pddl.constructs import did_you_mean
 from plan_bridge.pddl.task import PlanningTask
@@ -88,7 +90,13 @@ class WorldTarget(Target):
             # its slowest part); later runs load their own.
             loaded=self._loaded.pop() if self._loaded else None,
         )
-        return MissionSetup(skills=robosim_skills(world), world=world, task_view=self.view)
+        view = self.view
+        return MissionSetup(
+            skills=robosim_skills(world),
+            world=world,
+            task_view=view,
+            planner_for=None if view is None else partial(FleetPlanner, view=view),
+        )
 
 
 def variant_events(folder: Path, variant: str) -> list[WorldEvent]:
@@ -149,7 +157,9 @@ def load_world_target(
     goals = read_goals(folder) if folder is not None else {}
     name, goal = _goal_of(target, world_file, folder, goals, problem, goal)
     if prime is not None:
-        prime.warm_up(1)  # a planner process starts while pyrobosim loads the world
+        # Planner processes start while pyrobosim loads the world: two for a fleet,
+        # whose robots are planned side by side.
+        prime.warm_up(2 if _robots_in(world_file) > 1 else 1)
     started = time.perf_counter()
     sim = load_world_file(world_file)
     load_s = time.perf_counter() - started
@@ -196,6 +206,18 @@ def load_world_target(
 
 
 _GOAL_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_-]*$")
+
+
+def _robots_in(world_file: Path) -> int:
+    """How many robots a world file lists (0 when it cannot tell: loading says why)."""
+    import yaml
+
+    try:
+        data = yaml.safe_load(world_file.read_text(encoding="utf-8"))
+    except (OSError, yaml.YAMLError):
+        return 0
+    robots = data.get("robots") if isinstance(data, dict) else None
+    return len(robots) if isinstance(robots, list) else 0
 
 
 def _goal_of(

@@ -67,9 +67,10 @@ class ProblemSpec:
     search: str = ""
     """The Kairos search preset that suits problems of this kind, tried first (see
     :mod:`plan_bridge.planning.kairos_direct`); "" for Kairos' own choice."""
-    makespan_s: float = 0.0
+    improve_s: float = 0.0
     """When above 0: the problem's metric is to minimise the makespan (``total-time``),
-    and Kairos may spend this many seconds improving its first plan."""
+    and Kairos stops improving its plan once this many seconds pass without a better
+    one."""
 
     @cached_property
     def key(self) -> str:
@@ -89,7 +90,7 @@ class ProblemSpec:
         return {
             "name": self.name,
             "search": self.search,
-            "makespan_s": self.makespan_s,
+            "improve_s": self.improve_s,
             "objects": [list(pair) for pair in self.objects],
             "init": [list(atom) for atom in self.init],
             "values": [[*atom, value] for atom, value in self.values],
@@ -108,7 +109,7 @@ class ProblemSpec:
             ),
             tuple(tuple(str(w) for w in atom) for atom in data["goal"]),
             search=str(data.get("search", "")),
-            makespan_s=float(data.get("makespan_s", 0.0)),
+            improve_s=float(data.get("improve_s", 0.0)),
         )
 
     def with_state(
@@ -130,7 +131,7 @@ class ProblemSpec:
             self.goal if goal is None else tuple(goal),
             self.comment,
             self.search,
-            self.makespan_s,
+            self.improve_s,
         )
 
     # -- text ----------------------------------------------------------------------
@@ -145,7 +146,7 @@ class ProblemSpec:
         init = "\n    ".join([*facts, *numbers])
         goal = " ".join(_atom(a) for a in self.goal)
         head = f"; {self.comment}\n" if self.comment else ""
-        metric = "\n  (:metric minimize (total-time))" if self.makespan_s > 0 else ""
+        metric = "\n  (:metric minimize (total-time))" if self.improve_s > 0 else ""
         return (
             f"{head}(define (problem {self.name})\n"
             f"  (:domain {self.domain_name})\n"
@@ -188,7 +189,7 @@ class ProblemSpec:
             problem.set_initial_value(exp, number)
         for atom in self.goal:
             problem.add_goal(expression(atom))
-        if self.makespan_s > 0:
+        if self.improve_s > 0:
             from unified_planning.model.metrics import MinimizeMakespan  # type: ignore[import-untyped]
 
             problem.add_quality_metric(MinimizeMakespan(environment=problem.environment))

@@ -22,6 +22,7 @@ from typing import Any, Protocol
 
 from plan_bridge.errors import FactError
 from plan_bridge.pddl.front_end import FrontEnd, analyse, parse_with_up
+from plan_bridge.pddl.restate import replace_init
 from plan_bridge.pddl.source import (
     DEFAULT_MAX_BYTES,
     DEFAULT_MAX_DEPTH,
@@ -30,7 +31,6 @@ from plan_bridge.pddl.source import (
     check_source,
     decode_source,
     read_source,
-    replace_init,
 )
 from plan_bridge.pddl.spec import ProblemSpec
 from plan_bridge.pddl.up_runtime import ensure_unified_planning
@@ -56,6 +56,8 @@ class Primer(Protocol):
     here (:meth:`plan_bridge.planning.worker.WorkerPool.prime`)."""
 
     def prime(self, base: ProblemText) -> None: ...
+
+    def warm_up(self, count: int = 1) -> None: ...
 
 
 Fact = tuple[str, ...]

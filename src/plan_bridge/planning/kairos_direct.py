@@ -19,12 +19,16 @@ base from then on. Replies have the shape of the unified-planning path's.
 
 from __future__ import annotations
 
+import queue
 import re
+import threading
 import time
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any, Protocol
 
-from plan_bridge.pddl.source import SourceText, replace_init
+from plan_bridge.pddl.restate import replace_init
+from plan_bridge.pddl.source import SourceText
 from plan_bridge.pddl.spec import ProblemSpec
 
 __all__ = ["KAIROS", "KairosBase", "solve_with_kairos"]
@@ -86,23 +90,82 @@ def solve_with_kairos(base: _Source, request: dict[str, Any]) -> dict[str, Any] 
     limit = request.get("timeout")
     deadline = started + (float(limit) if limit is not None else _NO_KAIROS_TIMEOUT_S)
     params = dict(request.get("params") or {})
-    preset = base.spec.search if base.spec is not None and "search" not in params else ""
-    if base.spec is not None and base.spec.makespan_s > 0:
-        # A metric: improve the first plan for a moment, no longer (Kairos would go on
-        # until the time limit, or a proof that no plan is shorter).
-        deadline = min(deadline, started + base.spec.makespan_s)
+    spec = base.spec
+    window = spec.improve_s if spec is not None else 0.0
+    preset = spec.search if spec is not None and "search" not in params else ""
+    if preset:
         # The preset that suits this kind of problem first, on a share of the time;
         # Kairos' own choice after it, if it finds no plan.
         share = min(_PRESET_SHARE * (deadline - started), _PRESET_MAX_S)
         options = _options(kairos, text, params, preset, share)
-        result = kairos.Planner().solve(problem, options)  # type: ignore[no-untyped-call]
-        if result.plan is not None or result.status.name == "UNSOLVABLE":
-            return _reply(result, base.kairos.durative, time.monotonic() - started)
+        found = _search(kairos, problem, options, window, started + share)
+        if found.plan is not None or found.status == "UNSOLVABLE":
+            return _reply(found, base.kairos.durative, time.monotonic() - started)
         problem = kairos.parse_problem(text, base.kairos.domain, "problem.pddl")
     left = max(0.001, deadline - time.monotonic())
     options = _options(kairos, text, params, "", left)
-    result = kairos.Planner().solve(problem, options)  # type: ignore[no-untyped-call]
-    return _reply(result, base.kairos.durative, time.monotonic() - started)
+    found = _search(kairos, problem, options, window, deadline)
+    return _reply(found, base.kairos.durative, time.monotonic() - started)
+
+
+@dataclass(frozen=True)
+class _Found:
+    """What a search ended with: Kairos' status name, the best plan, the stop reason."""
+
+    status: str
+    plan: Any
+    optimal: bool
+    diagnostics: tuple[Any, ...] = ()
+
+
+def _search(kairos: Any, problem: Any, options: Any, window: float, deadline: float) -> _Found:
+    """Kairos' search; with ``window`` > 0 and a metric, it is stopped once ``window``
+    seconds pass without a better plan (Kairos' own ``stop_after_no_improvement`` is
+    not honoured by its planner), else it runs to its end or time limit."""
+    planner = kairos.Planner()
+    start = getattr(getattr(planner, "_planner", None), "start", None)
+    if window <= 0 or not options.anytime or start is None:
+        result = planner.solve(problem, options)
+        return _Found(
+            result.status.name,
+            result.plan,
+            result.stop_reason == kairos.StopReason.PROVEN_OPTIMAL,
+            tuple(result.diagnostics),
+        )
+    search = start(problem, options, None, None)
+    plans: queue.Queue[Any] = queue.Queue()
+
+    def collect() -> None:
+        try:
+            for plan in search.plans():
+                plans.put(plan)
+        finally:
+            plans.put(None)
+
+    threading.Thread(target=collect, name="kairos-plans", daemon=True).start()
+    best: Any = None
+    ended = False
+    while True:
+        wait = deadline - time.monotonic()
+        if best is not None:
+            wait = min(wait, window)
+        if wait <= 0:
+            break
+        try:
+            plan = plans.get(timeout=wait)
+        except queue.Empty:
+            break
+        if plan is None:
+            ended = True
+            break
+        best = plan
+    search.stop()
+    result = search.wait()
+    if best is None:
+        best = result.plan
+    optimal = ended and result.stop_reason == kairos.StopReason.PROVEN_OPTIMAL
+    status = "SOLVED" if best is not None else result.status.name
+    return _Found(status, best, optimal, tuple(result.diagnostics))
 
 
 def _options(kairos: Any, text: str, params: dict[str, Any], search: str, seconds: float) -> Any:
@@ -140,19 +203,13 @@ def _problem_text(base: _Source, request: dict[str, Any]) -> str | None:
     )
 
 
-def _reply(result: Any, durative: frozenset[str], seconds: float) -> dict[str, Any]:
-    import kairos
-
-    status = _STATUS.get(result.status.name, "INTERNAL_ERROR")
+def _reply(found: _Found, durative: frozenset[str], seconds: float) -> dict[str, Any]:
+    status = _STATUS.get(found.status, "INTERNAL_ERROR")
     plan: list[list[Any]] = []
-    if result.plan is not None:
-        status = (
-            "SOLVED_OPTIMALLY"
-            if result.stop_reason == kairos.StopReason.PROVEN_OPTIMAL
-            else "SOLVED_SATISFICING"
-        )
-        plan = [_entry(step, result.plan.temporal, durative) for step in result.plan.steps]
-    messages = [str(d) for d in result.diagnostics]
+    if found.plan is not None:
+        status = "SOLVED_OPTIMALLY" if found.optimal else "SOLVED_SATISFICING"
+        plan = [_entry(step, found.plan.temporal, durative) for step in found.plan.steps]
+    messages = [str(d) for d in found.diagnostics]
     return {
         "outcome": "result",
         "status": status,

@@ -273,9 +273,7 @@ def _door(world: RobosimWorld, robot: Any, action: str, args: list[str]) -> Acti
     centre: the world opens it, with the robot's own fault draw.)"""
     hall = world.name(args[1])
     if robot.manipulated_object is not None:  # as pyrobosim's robot says it
-        return ActionResult(
-            "PRECONDITION_FAILURE", f"Robot is holding an object. Cannot {action}."
-        )
+        return ActionResult("PRECONDITION_FAILURE", f"Robot is holding an object. Cannot {action}.")
     if world.draw_fault(robot, action):
         return ActionResult("EXECUTION_FAILURE", f"Simulated {action} failure.")
     call = world.sim.open_location if action == "open" else world.sim.close_location
