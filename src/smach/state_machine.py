@@ -15,20 +15,19 @@ from __future__ import annotations
 import threading
 import time
 from collections.abc import Iterable, Mapping, Sequence
-from typing import Any, ClassVar, NoReturn
+from typing import Any
 
 import smach
 from smach.container import Container, construction_method
-from smach.events import Capture, StateExited, Transition
+from smach.events import Capture
 from smach.exceptions import (
-    InvalidOutcomeError,
     InvalidStateError,
     InvalidTransitionError,
-    InvalidUserCodeError,
 )
+from smach.machine_runs import MachineRuns, Slot
 from smach.runtime import Runtime
 from smach.state import State
-from smach.user_data import Remapper, UserData
+from smach.user_data import UserData
 from smach.util import is_shutdown as _never
 from smach.util import key_list
 
@@ -44,40 +43,13 @@ _KEY_LISTS: dict[tuple[str, ...], str] = {}
 _KEY_LISTS_MAX = 1024
 
 
-class _Slot:
-    """A compiled child: everything one step of the loop needs."""
-
-    __slots__ = ("constants", "inline", "label", "next", "path", "remapper", "state")
-
-    def __init__(
-        self, label: str, state: State, remapper: Remapper, constants: dict[str, Any], path: str
-    ) -> None:
-        self.label = label
-        self.state = state
-        self.remapper = remapper
-        self.constants = constants or None  # None: nothing to write (one test per step)
-        self.path = path  # the child's path in events (slots are recompiled on adoption)
-        self.next: dict[str, _Slot | str] = {}
-        # The child itself when its runs are taken inline by the parent's loop (a plain
-        # StateMachine: see StateMachine.run_children), else None.
-        self.inline: StateMachine | None = (
-            state if isinstance(state, StateMachine) and state._runs_inline else None
-        )
-
-
-# A machine above the one running, in a loop that runs its children inline: the machine,
-# the step it is in (its slot) and that step's loop variables (held captures, log,
-# log_steps).
-_Level = tuple["StateMachine", _Slot, tuple[Capture, ...], bool, bool]
-
-
-class StateMachine(Container):
+class StateMachine(MachineRuns):
     """A container that runs its children one at a time, following transitions."""
 
     #: Whether a parent StateMachine runs this machine's runs in its own loop instead
     #: of calling ``execute`` (see ``run_children``): true unless the class replaces
     #: ``execute`` or ``run_children`` or wants its outcomes checked.
-    _runs_inline: ClassVar[bool] = True
+    _runs_inline = True
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
@@ -89,9 +61,6 @@ class StateMachine(Container):
 
     # Every target the table can return was checked to be an outcome of the machine.
     _outcome_checked = True
-    # The state last asked to preempt; set on the instance only by a preemption (an
-    # instance keeps at most 29 attributes: see Container, ``_start_cbs``).
-    _preempted_state: State | None = None
 
     def __init__(
         self,
@@ -108,10 +77,10 @@ class StateMachine(Container):
         # The last added label, and the connector outcomes of its add_auto() that the
         # next add() links.
         self._last_added: tuple[str, list[str]] | None = None
-        self._current_slot: _Slot | None = None
+        self._current_slot: Slot | None = None
         self._preempt_lock = threading.Lock()
         # The compiled slots by label, and the initial state's slot (set by compile_children).
-        self._slots: tuple[dict[str, _Slot], _Slot] | None = None
+        self._slots: tuple[dict[str, Slot], Slot] | None = None
         # The last run's final state and its outcome (terminal states, the log line).
         self._last_exit: tuple[str, str | None] = ("", None)
 
@@ -274,7 +243,7 @@ class StateMachine(Container):
 
     def compile_children(self) -> None:
         slots = {
-            label: _Slot(
+            label: Slot(
                 label,
                 state,
                 self.child_remapper(label, state, self._remappings[label]),
@@ -316,8 +285,8 @@ class StateMachine(Container):
         time, more of them where calls were made right at the boundary, depending on
         how deep the caller's stack was: see docs/performance.md.)
         """
-        sm = self
-        slot = self._slots[1]  # type: ignore[index]  # (compiled before every run)
+        sm: MachineRuns = self
+        slot: Slot = self._slots[1]  # type: ignore[index]  # (compiled before every run)
         label = ""
         # With capture listeners only, the state_exited + transition of a step are held
         # until the next state is entered (nothing else happens in between in this
@@ -330,8 +299,9 @@ class StateMachine(Container):
         # a line when a state is entered (StateMachine writes none, as the original).
         log_steps = log and self._logs_entries
         watched: object = False
-        # The machines above the one running (children run inline), innermost last.
-        above: list[_Level] = []
+        # The machines above the one running (children run inline), innermost last; each
+        # is in the step of its ``_current_slot``, the child running.
+        above: list[MachineRuns] = []
         ascending = False  # (the machine running has ended, with ``result``)
         outcome: Any = None
         result: str | None = None
@@ -343,9 +313,12 @@ class StateMachine(Container):
                     held, pending = pending, ()  # (sent by the call that takes them)
                     if not above:
                         return sm._end_loop(slot, outcome, result, held, watched)
-                    sm._leave_inline(slot, outcome, result, held, watched, above[-1][1].remapper)
-                    sm, slot, pending, log, log_steps = above.pop()
+                    sm._leave_inline(slot, outcome, result, held, watched, above[-1])
+                    sm = above.pop()
+                    slot = sm._current_slot  # type: ignore[assignment]  # (its step: the child)
                     label = slot.label
+                    log = sm._log_info
+                    log_steps = log and sm._logs_entries
                     outcome = result
                     ascending = watched = False  # (a child is run inline only unwatched)
                 # The default check never says yes; skip the call unless replaced.
@@ -368,9 +341,10 @@ class StateMachine(Container):
                         )  # fmt: skip
                     elif slot.inline is not None:  # a plain StateMachine: run it here
                         child = slot.inline
-                        child._enter_inline(sm, label, slot.remapper)
-                        above.append((sm, slot, pending, log, log_steps))
-                        sm, slot, pending = child, child._slots[1], ()  # type: ignore[index]
+                        held, pending = pending, ()  # (sent first by the call that takes them)
+                        child._enter_inline(sm, label, slot.remapper, held)
+                        above.append(sm)
+                        sm, slot = child, child._slots[1]  # type: ignore[index]
                         log = child._log_info
                         log_steps = log and child._logs_entries
                         continue
@@ -386,7 +360,7 @@ class StateMachine(Container):
                     result = None
                     ascending = True
                     continue
-                if target.__class__ is not _Slot:  # a container outcome: this machine ends
+                if target.__class__ is not Slot:  # a container outcome: this machine ends
                     result = target  # type: ignore[assignment]
                     ascending = True
                     continue
@@ -400,187 +374,6 @@ class StateMachine(Container):
         except BaseException as exc:
             self._unwind(exc, above, sm, pending)
 
-    def _end_loop(
-        self,
-        slot: _Slot,
-        outcome: str,
-        result: str | None,
-        pending: tuple[Capture, ...],
-        watched: object,
-    ) -> str | None:
-        """The end of this machine's loop: its last state ``slot`` returned ``outcome``
-        and the run ends with ``result`` (``None``: smach is shutting down). Reports the
-        last exit (when ``result`` is a container outcome), sends ``pending``."""
-        try:
-            if result is not None:
-                if pending or watched or self._preempt_requested:
-                    pending = self._end_run(slot, outcome, self._thread, pending)
-                else:  # (what _end_run comes to when nobody watches and nothing is pending)
-                    self._last_exit = (slot.label, outcome)
-        finally:
-            if pending:
-                self._release(pending)
-            self._current_slot = None
-        return result
-
-    def _enter_inline(self, parent: StateMachine, label: str, parent_ud: UserData) -> None:
-        """``parent``'s loop takes this machine's run over (child ``label``, given
-        ``parent_ud``): what ``Container.execute`` does up to ``run_children()``, and the
-        start of that. An error is raised as ``parent``'s step of a called child would."""
-        try:
-            if self._stale:
-                self._prepare()
-            if self._running:
-                raise InvalidStateError(f"{self._path} is already running (in another thread?)")
-        except Exception as exc:
-            parent._raise_child_error(label, self, exc)
-        self._running = True
-        try:
-            if self._copies_in:
-                self._copy_input_keys(parent_ud)
-            self._log_info = self._rt.log_info
-            if self._rt.bus.listeners or self._local:
-                self._thread = _current_thread().name
-                self._emit_started(self._start_states(), self._thread)
-            else:
-                self._thread = None
-                if self._log_info:
-                    self._log_started()
-            if self._preempted_state is not None:
-                self._preempted_state = None
-        except BaseException as exc:
-            self._fail_inline(exc, parent, label)
-            raise
-
-    def _leave_inline(
-        self,
-        slot: _Slot,
-        outcome: str,
-        result: str | None,
-        pending: tuple[Capture, ...],
-        watched: object,
-        parent_ud: UserData,
-    ) -> None:
-        """This machine's run, taken over by its parent's loop (which gave it
-        ``parent_ud``), ended with ``result``: what its ``run_children()`` does then
-        (:meth:`_end_loop`, written out here: one call less per level) and the end of
-        ``Container.execute``. An error goes to the parent's loop, whose ``_unwind``
-        finishes this run if ``_running`` says it has not been finished."""
-        try:
-            if result is not None:
-                if pending or watched or self._preempt_requested:
-                    pending = self._end_run(slot, outcome, self._thread, pending)
-                else:
-                    self._last_exit = (slot.label, outcome)
-        finally:
-            if pending:
-                self._release(pending)
-            self._current_slot = None
-        if result is not None:
-            if self._rt.bus.listeners or self._local:
-                self._emit_terminated(self._terminal_states(), result, self._thread)
-            elif self._log_info:
-                self._log_terminated(result)
-            if self._copies_out:
-                self._copy_output_keys(parent_ud)
-        self._running = False
-        if self._rt.preempt_seen:
-            self._after_run()
-
-    def _fail_inline(self, exc: BaseException, parent: StateMachine, label: str) -> None:
-        """``exc`` ends this machine's run taken over by ``parent``'s loop: the error
-        event and the end of the run (``Container.execute``'s ``except`` and
-        ``finally``), then, for an ``Exception``, ``parent``'s step raises it (or its
-        wrapper) as for a called child. (A ``BaseException`` goes on as it is.)"""
-        try:
-            try:
-                if isinstance(exc, Exception):
-                    self._emit_error(exc)
-            finally:
-                self._running = False
-                if self._rt.preempt_seen:
-                    self._after_run()
-        except BaseException as late:  # (raised while ending the run: it goes on instead)
-            exc = late
-        if isinstance(exc, Exception):
-            parent._raise_child_error(label, self, exc)
-
-    def _unwind(
-        self,
-        exc: BaseException,
-        above: list[_Level],
-        sm: StateMachine,
-        pending: tuple[Capture, ...],
-    ) -> NoReturn:
-        """``exc`` left the loop while it ran ``sm`` (this machine, or one run inline
-        below it, ``above`` holding the machines in between): do what the frames of
-        the nested calls would have done, innermost first, and raise what this
-        machine's loop raises. For each machine: the loop's ``finally`` (``pending``
-        sent); below this one, the end of its run (:meth:`_fail_inline`) unless it
-        was over (``_running`` cleared: the error came from its last step), and its
-        parent's step raising what it raised."""
-        while True:
-            try:
-                if pending:
-                    sm._release(pending)
-            finally:
-                sm._current_slot = None
-            if not above:
-                raise exc  # (its cause as the frames would have set it)
-            child = sm
-            sm, slot, pending = above.pop()[:3]
-            try:
-                if child._running:
-                    child._fail_inline(exc, sm, slot.label)
-                elif isinstance(exc, Exception):
-                    sm._raise_child_error(slot.label, child, exc)
-            except BaseException as raised:  # (what the parent's step raises)
-                exc = raised
-
-    def _end_run(
-        self, slot: _Slot, outcome: str, thread: str | None, pending: tuple[Capture, ...]
-    ) -> tuple[Capture, ...]:
-        """The last state returned ``outcome``, a container outcome: report its exit,
-        service our preempt request if it did. Returns ``()`` (``pending`` sent)."""
-        if pending:  # (listeners came or went during the run)
-            self._release(pending)
-        label = slot.label
-        if self._rt.bus.listeners or self._local:
-            self._emit_exited(label, outcome, thread)
-        self._last_exit = (label, outcome)
-        if self._preempt_requested and not slot.state._preempt_requested:
-            self.service_preempt()
-        return ()
-
-    def _no_transition(self, slot: _Slot, outcome: object) -> None:
-        """``outcome`` of ``slot`` has no transition: raise the error, unless smach is
-        shutting down (the state returned None; the machine then returns None)."""
-        if outcome is None and smach.is_shutdown():
-            return
-        raise self._missing_transition(slot, outcome) from None
-
-    def _report_step(
-        self, slot: _Slot, outcome: str, target: _Slot, thread: str | None
-    ) -> tuple[Capture, ...]:
-        """Report the exit of ``slot`` and the transition to ``target``: returns them held
-        (for the next ``state_entered``) when only capture listeners listen."""
-        bus = self._rt.bus
-        held: tuple[Capture, ...] = ()
-        if bus.event_listeners or self._local:
-            self._emit_step(slot, outcome, target, thread)
-        elif bus.sinks:
-            t = _monotonic()
-            label = slot.label
-            if thread is None:  # (a listener came during a run that started unwatched)
-                thread = _current_thread().name
-            held = (
-                (StateExited, slot.path, t, thread, label, outcome),
-                (Transition, self._path, t, thread, label, outcome, target.label),
-            )
-        if self._log_info:
-            self._log_transition(slot.label, outcome, target.label)
-        return held
-
     def _start_states(self) -> list[str]:
         # (Never None during a run: the consistency check saw to it.)
         return [self._initial_state_label]  # type: ignore[list-item]
@@ -588,55 +381,10 @@ class StateMachine(Container):
     def _terminal_states(self) -> list[str]:
         return [self._last_exit[0]]
 
-    def _emit_step(self, slot: _Slot, outcome: str, target: _Slot, thread: str | None) -> None:
-        """``state_exited`` of ``slot`` then the ``transition`` to ``target`` (one time)."""
-        t = _monotonic()
-        if thread is None:
-            thread = _current_thread().name
-        label = slot.label
-        path = self._path
-        bus = self._rt.bus
-        if bus.batch_sinks:
-            pair = (
-                (StateExited, slot.path, t, thread, label, outcome),
-                (Transition, path, t, thread, label, outcome, target.label),
-            )
-            for sink in bus.batch_sinks:
-                try:
-                    sink(pair)
-                except Exception as exc:
-                    bus.sink_failed(sink, exc)
-        if bus.event_listeners or self._local:
-            self._deliver(
-                StateExited(path=slot.path, time=t, thread=thread, label=label, outcome=outcome)
-            )
-            # Callbacks read get_active_states(): show the new state.
-            self._current_slot = target
-            self._deliver(
-                Transition(
-                    path=path,
-                    time=t,
-                    thread=thread,
-                    source=label,
-                    outcome=outcome,
-                    target=target.label,
-                )
-            )
-        else:
-            self._current_slot = target
-
     def _attach(self, runtime: Runtime, path: str) -> None:
         super()._attach(runtime, path)
         for slot in self._slots[0].values() if self._slots else ():
             slot.path = f"{path}/{slot.label}"  # (slots hold the children's paths)
-
-    def _missing_transition(self, slot: _Slot, outcome: object) -> InvalidUserCodeError:
-        if outcome in slot.state.get_registered_outcomes():
-            return InvalidOutcomeError(
-                f"state {self._path}/{slot.label} returned {outcome!r}, which was registered "
-                f"after the state was added and has no transition"
-            )
-        return self._bad_outcome(slot.label, slot.state, outcome)
 
     # -- preemption ------------------------------------------------------------------------------
     def request_preempt(self) -> None:
