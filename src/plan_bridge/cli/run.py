@@ -458,7 +458,13 @@ def _start_mission(args: argparse.Namespace, target: Target, resources: Any) -> 
     args.seed = robot.robot_info.get("seed", args.seed)
     return _Start(
         replace(options, seed=args.seed, fail_rate=fail_rate),
-        MissionSetup(skills=robot.skills(), world=robot.world(), concurrent=robot.concurrent),
+        MissionSetup(
+            skills=robot.skills(),
+            world=robot.world(),
+            concurrent=robot.concurrent,
+            task_view=target.task_view,
+            planner_for=target.planner_for,
+        ),
         f"{robot.robot_info.get('mode')} on the robot node /{robot.prefix}",
         robot,
     )

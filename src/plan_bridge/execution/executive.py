@@ -134,6 +134,8 @@ class Executive(PlanContainer):
         self.model = ActionModel(task)
         #: Makes the task to plan from the belief (a world with a map: execution/task_view.py).
         self.task_view = task_view
+        # The goal a knowledge base of the whole world set (its task: the view's).
+        self._goal: tuple[Fact, ...] = ()
         if belief is not None:
             self.belief = belief
         elif task_view is not None:
@@ -465,7 +467,13 @@ class Executive(PlanContainer):
         if self.is_running():
             raise RuntimeError(f"executive {self.path}: attach a knowledge base before the run")
         self.detach_knowledge()
-        self._link = KnowledgeLink(knowledge, self.belief, self.task, self._knowledge_changed)
+        self._link = KnowledgeLink(
+            knowledge,
+            self.belief,
+            self.task,
+            self._knowledge_changed,
+            whole_world=self.task_view is not None,
+        )
         self.knowledge = knowledge
 
     def detach_knowledge(self) -> None:
@@ -486,6 +494,10 @@ class Executive(PlanContainer):
             raise MissionEnded("aborted", f"the knowledge base's problem: {exc}") from exc
         if task is not None:
             self._use_task(task)
+        elif news and self._link is not None and self._link.whole_world:
+            # The view makes the task of the knowledge base's goal from the belief.
+            self._goal = tuple(self._link.knowledge.goal)
+            self._retask()
         return news
 
     def _knowledge_pending(self) -> bool:
@@ -498,7 +510,7 @@ class Executive(PlanContainer):
         if view is None:
             return
         try:
-            task = view.task_for(self.belief.facts, self.task.goal_facts)
+            task = view.task_for(self.belief.facts, self._goal or self.task.goal_facts)
         except PlanBridgeError as exc:
             raise MissionEnded("aborted", f"no task for the belief: {exc}") from exc
         if task is self.task:

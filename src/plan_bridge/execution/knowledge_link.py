@@ -36,15 +36,20 @@ class KnowledgeLink:
         belief: WorldState,
         task: PlanningTask,
         stop: Callable[[], None],
+        *,
+        whole_world: bool = False,
     ) -> None:
         self.knowledge = knowledge
+        #: The knowledge base holds the whole world of a task view: the executive takes
+        #: its goal, and the view makes the task (:meth:`take` builds none).
+        self.whole_world = whole_world
         self._stop = stop
         self._lock = threading.Lock()
         self._news: list[str] = []
         belief.replace(knowledge.facts, knowledge.values)
         knowledge.use_facts(belief)
         knowledge.add_listener(self._changed)
-        if not knowledge.describes(task):
+        if not whole_world and not knowledge.describes(task):
             self._news.append("the executive's task is not the knowledge base's problem")
 
     @property
@@ -54,13 +59,13 @@ class KnowledgeLink:
 
     def take(self) -> tuple[str, PlanningTask | None]:
         """What changed (``""``: nothing) and the task of the knowledge base's problem
-        now (None when nothing changed)."""
+        now (None when nothing changed, or when it holds a whole world)."""
         with self._lock:
             news, self._news = self._news, []
         if not news:
             return "", None
         shown = "; ".join(news[:5]) + (f"; and {len(news) - 5} more" if len(news) > 5 else "")
-        return shown, self.knowledge.task()
+        return shown, None if self.whole_world else self.knowledge.task()
 
     def close(self) -> None:
         """Stop following: the knowledge base keeps a copy of the facts."""

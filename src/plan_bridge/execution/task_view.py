@@ -39,6 +39,10 @@ class TaskView(Protocol):
         values); the first task's map atoms are added to it."""
         ...
 
+    def objects(self) -> Mapping[str, str]:
+        """Every object of the world and its type (lower case)."""
+        ...
+
     def task_for(self, facts: FactSnapshot, goal: Sequence[Fact]) -> PlanningTask:
         """The task for the belief ``facts`` and the goal atoms ``goal``: the same task
         object as before when nothing it holds changed."""

@@ -130,6 +130,17 @@ class Target:
         """Whether the folder's Python defines ``setup()`` (its own skills and world)."""
         return self.module is not None and hasattr(self.module, "setup")
 
+    @property
+    def task_view(self) -> TaskView | None:
+        """What makes the task to plan from the belief (a world with a map), for
+        :attr:`MissionSetup.task_view`; None: this target's task throughout."""
+        return None
+
+    def planner_for(self, inner: Planner) -> Planner:
+        """The planner of a run of this target that plans with ``inner``
+        (:attr:`MissionSetup.planner_for`): ``inner`` itself."""
+        return inner
+
     def setup(self, *, seed: int, fail_rate: float, variant: str = "") -> MissionSetup:
         """Skills and world for one run: the domain's ``setup()`` (or symbolic skills),
         then the folder's ``skills.toml`` on top (its :class:`SkillMap` in

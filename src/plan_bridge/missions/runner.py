@@ -124,7 +124,14 @@ class Mission:
         ``RobotConnection.serve_knowledge``). Returns it."""
         from plan_bridge.pddl.knowledge import KnowledgeBase
 
-        if knowledge is None:
+        view = self.executive.task_view
+        if knowledge is None and view is not None:
+            # The whole world the view knows, not the one plan's task.
+            belief = self.executive.belief.facts
+            knowledge = KnowledgeBase.from_state(
+                self.executive.task, view.objects(), belief, belief.values
+            )
+        elif knowledge is None:
             knowledge = KnowledgeBase.from_task(self.executive.task)
         self.executive.attach_knowledge(knowledge)
         return knowledge

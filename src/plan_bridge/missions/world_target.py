@@ -22,7 +22,6 @@ from __future__ import annotations
 import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -37,6 +36,7 @@ from plan_bridge.robosim.target_files import read_goals
 if TYPE_CHECKING:
     from plan_bridge.maps.model import WorldModel
     from plan_bridge.maps.tasks import RouteTasks
+    from plan_bridge.planning.types import Planner
     from plan_bridge.planning.worker import WorkerPool
     from plan_bridge.robosim.world import RobosimWorld
 
@@ -90,13 +90,20 @@ class WorldTarget(Target):
             # its slowest part); later runs load their own.
             loaded=self._loaded.pop() if self._loaded else None,
         )
-        view = self.view
         return MissionSetup(
             skills=robosim_skills(world),
             world=world,
-            task_view=view,
-            planner_for=None if view is None else partial(FleetPlanner, view=view),
+            task_view=self.view,
+            planner_for=self.planner_for,
         )
+
+    @property
+    def task_view(self) -> RouteTasks | None:
+        return self.view
+
+    def planner_for(self, inner: Planner) -> Planner:
+        """A fleet planner over ``inner`` (with one robot it plans as ``inner``)."""
+        return inner if self.view is None else FleetPlanner(inner, self.view)
 
 
 def variant_events(folder: Path, variant: str) -> list[WorldEvent]:
@@ -230,6 +237,7 @@ def _goal_of(
 ) -> tuple[str, str]:
     """(the goal's name or "", its atoms' text) of what was asked for: ``goal``, a
     name of goals.yaml given as ``goal`` or ``problem``, or the first of goals.yaml."""
+    name = str(problem) if problem is not None and Path(problem) != world_file else ""
     if goal is not None and _GOAL_NAME.match(goal.strip()):
         word = goal.strip()
         if word in goals:
@@ -240,8 +248,7 @@ def _goal_of(
             f"name of a goal{did_you_mean(word, goals)}{known}"
         )
     if goal is not None:
-        return "", goal
-    name = str(problem) if problem is not None and Path(problem) != world_file else ""
+        return Path(name).name if name else "", goal
     if not goals:
         raise TargetError(
             f'{target}: give the goal with --goal, e.g. --goal "(At apple0 table0_tabletop)" '

@@ -206,6 +206,27 @@ class KnowledgeBase:
         kb._goal = dict.fromkeys(task.goal_facts)
         return kb
 
+    @classmethod
+    def from_state(
+        cls,
+        task: PlanningTask,
+        objects: Mapping[str, str],
+        facts: Iterable[Fact],
+        values: Mapping[Fact, float],
+    ) -> KnowledgeBase:
+        """A knowledge base of ``task``'s domain and goal holding ``objects`` (name ->
+        type), ``facts`` and ``values``: the whole world of a task view, of which the
+        task has only what one plan needs."""
+        kb = cls.from_task(task)
+        constants = kb._domain.constants
+        kb._instances = {n: t for n, t in objects.items() if n not in constants}
+        known = {**constants, **kb._instances}
+        kb._store = _OwnFacts(
+            (f for f in facts if all(a in known for a in f[1:])),
+            {a: v for a, v in values.items() if all(n in known for n in a[1:])},
+        )
+        return kb
+
     def _init(self, domain: DomainTerms, name: str) -> None:
         name = name.lower()
         if not NAME.match(name):

@@ -67,10 +67,11 @@ class ProblemSpec:
     search: str = ""
     """The Kairos search preset that suits problems of this kind, tried first (see
     :mod:`plan_bridge.planning.kairos_direct`); "" for Kairos' own choice."""
+    makespan_metric: bool = False
+    """The problem's metric: minimise the makespan (``total-time``)."""
     improve_s: float = 0.0
-    """When above 0: the problem's metric is to minimise the makespan (``total-time``),
-    and Kairos stops improving its plan once this many seconds pass without a better
-    one."""
+    """With the metric: Kairos improves its first plan until this many seconds pass
+    without a better one (0: the first plan, as without a metric)."""
 
     @cached_property
     def key(self) -> str:
@@ -90,6 +91,7 @@ class ProblemSpec:
         return {
             "name": self.name,
             "search": self.search,
+            "makespan_metric": self.makespan_metric,
             "improve_s": self.improve_s,
             "objects": [list(pair) for pair in self.objects],
             "init": [list(atom) for atom in self.init],
@@ -109,6 +111,7 @@ class ProblemSpec:
             ),
             tuple(tuple(str(w) for w in atom) for atom in data["goal"]),
             search=str(data.get("search", "")),
+            makespan_metric=bool(data.get("makespan_metric", False)),
             improve_s=float(data.get("improve_s", 0.0)),
         )
 
@@ -131,6 +134,7 @@ class ProblemSpec:
             self.goal if goal is None else tuple(goal),
             self.comment,
             self.search,
+            self.makespan_metric,
             self.improve_s,
         )
 
@@ -146,7 +150,7 @@ class ProblemSpec:
         init = "\n    ".join([*facts, *numbers])
         goal = " ".join(_atom(a) for a in self.goal)
         head = f"; {self.comment}\n" if self.comment else ""
-        metric = "\n  (:metric minimize (total-time))" if self.improve_s > 0 else ""
+        metric = "\n  (:metric minimize (total-time))" if self.makespan_metric else ""
         return (
             f"{head}(define (problem {self.name})\n"
             f"  (:domain {self.domain_name})\n"
@@ -189,7 +193,7 @@ class ProblemSpec:
             problem.set_initial_value(exp, number)
         for atom in self.goal:
             problem.add_goal(expression(atom))
-        if self.improve_s > 0:
+        if self.makespan_metric:
             from unified_planning.model.metrics import MinimizeMakespan  # type: ignore[import-untyped]
 
             problem.add_quality_metric(MinimizeMakespan(environment=problem.environment))

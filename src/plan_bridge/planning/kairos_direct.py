@@ -92,18 +92,20 @@ def solve_with_kairos(base: _Source, request: dict[str, Any]) -> dict[str, Any] 
     params = dict(request.get("params") or {})
     spec = base.spec
     window = spec.improve_s if spec is not None else 0.0
+    # A problem built with a metric but no time to improve plans: the first plan.
+    anytime = None if spec is None or window > 0 else False
     preset = spec.search if spec is not None and "search" not in params else ""
     if preset:
         # The preset that suits this kind of problem first, on a share of the time;
         # Kairos' own choice after it, if it finds no plan.
         share = min(_PRESET_SHARE * (deadline - started), _PRESET_MAX_S)
-        options = _options(kairos, text, params, preset, share)
+        options = _options(kairos, text, params, preset, share, anytime)
         found = _search(kairos, problem, options, window, started + share)
         if found.plan is not None or found.status == "UNSOLVABLE":
             return _reply(found, base.kairos.durative, time.monotonic() - started)
         problem = kairos.parse_problem(text, base.kairos.domain, "problem.pddl")
     left = max(0.001, deadline - time.monotonic())
-    options = _options(kairos, text, params, "", left)
+    options = _options(kairos, text, params, "", left, anytime)
     found = _search(kairos, problem, options, window, deadline)
     return _reply(found, base.kairos.durative, time.monotonic() - started)
 
@@ -168,11 +170,18 @@ def _search(kairos: Any, problem: Any, options: Any, window: float, deadline: fl
     return _Found(status, best, optimal, tuple(result.diagnostics))
 
 
-def _options(kairos: Any, text: str, params: dict[str, Any], search: str, seconds: float) -> Any:
+def _options(
+    kairos: Any,
+    text: str,
+    params: dict[str, Any],
+    search: str,
+    seconds: float,
+    anytime: bool | None = None,
+) -> Any:
     options = kairos.SearchOptions()
     options.timeout = seconds
     # As UP's Kairos engine does: improve a plan only when a metric says what is better.
-    options.anytime = ":metric" in text.lower()
+    options.anytime = ":metric" in text.lower() if anytime is None else anytime
     for name, value in params.items():
         if name in _OPTIONS:
             setattr(options, name, value)

@@ -140,6 +140,11 @@ class SkillServer:
                 raise ValueError("a pyrobosim world is served with its task and its skills")
             self.task = task
             self._model = ActionModel(task)
+        # The objects a step may name: the task's; of a pyrobosim world, every object
+        # of its map (the executive plans tasks of the places each plan needs).
+        self._objects = set(self.task.objects)
+        if not isinstance(world, SimulatedWorld):
+            self._objects |= {name.lower() for name in world.model.names}
         self.prefix = prefix.rstrip("/")
         self.action_time = action_time
         self.skills = skills
@@ -255,7 +260,7 @@ class SkillServer:
             raise ValueError(f"unknown action {action!r}; actions: {', '.join(self.task.actions)}")
         if len(args) != schema.arity:
             raise ValueError(f"{action} takes {schema.arity} arguments, got {len(args)}")
-        unknown = [a for a in args if a not in self.task.objects]
+        unknown = [a for a in args if a not in self._objects]
         if unknown:
             raise ValueError(f"unknown objects {unknown}")
         return PlanStep(action, args)
@@ -539,18 +544,16 @@ def _robosim_facts(world: RobosimWorld, task: PlanningTask) -> set[Fact]:
     by_type: dict[str, list[str]] = {}
     for name, kind in task.objects.items():
         by_type.setdefault(kind, []).append(name)
-    bots, items = by_type.get("bot", []), by_type.get("item", [])
-    spawns = by_type.get("spawn", [])
-    spots = [*by_type.get("area", []), *spawns, *by_type.get("door", [])]
+    bots, items, spots = by_type.get("bot", []), by_type.get("item", []), by_type.get("spot", [])
     gates = [*by_type.get("hall", []), *by_type.get("fixture", [])]
     candidates: list[Fact] = [
         *(("at", r, s) for r in bots for s in spots),
-        *(("at", i, s) for i in items for s in spawns),
+        *(("at", i, s) for i in items for s in spots),
         *(("holding", r, i) for r in bots for i in items),
         *(("handempty", r) for r in bots),
         *((p, g) for p in ("isopen", "islocked") for g in gates),
         *(("has", g, i) for g in by_type.get("fixture", []) for i in items),
-        *(("searched", s) for s in spawns),
+        *(("searched", s) for s in spots),
     ]
     facts = {f for f in task.initial_facts if f[0] not in ROBOSIM_PREDICATES}
     facts.update(f for f in candidates if world.truth(f))

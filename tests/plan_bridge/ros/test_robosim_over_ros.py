@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import subprocess
 import sys
 import threading
@@ -164,7 +165,10 @@ def test_plan_bridge_run_ros_reaches_the_goal_as_in_one_process_events_on_the_ro
     assert ros["goal_reached"] and ros["ros"]["robot"] == "started"
     # The events happened in the robot's world, which the executive learnt of through
     # the skills' observations: it replanned through the office.
-    assert "  [robot] world 22.00 s: hall_kitchen_living_room closed" in across.stderr
+    # (At 22 s, or once the robot left the hallway: pyrobosim closes none with a robot in it.)
+    assert re.search(
+        r"  \[robot\] world 22\.\d\d s: hall_kitchen_living_room closed", across.stderr
+    )
     assert ros["world_changes"] == 2 and ros["replans"] >= 1
     # The same run as in one process: steps, faults, distance and battery (the
     # robot's figures come over its info service).
