@@ -2,9 +2,10 @@
 
 Usage::
 
-    .venv/bin/python benchmarks/core_bench.py            # full run (about a minute)
-    .venv/bin/python benchmarks/core_bench.py --quick    # small sizes, a few seconds
-    .venv/bin/python benchmarks/core_bench.py --json results.json
+    .venv/bin/python benchmarks/core_bench.py            # full run, 6 fresh processes
+    .venv/bin/python benchmarks/core_bench.py --quick    # small sizes, about a minute
+    .venv/bin/python benchmarks/core_bench.py --processes 10 --only nested,nested_key
+    .venv/bin/python benchmarks/core_bench.py --processes 1 --json results.json
 
 Every scenario is timed in repeated trials; each trial runs the scenario enough times
 to last at least ``min_trial_s`` (gc disabled inside the timed region, as ``timeit``
@@ -24,6 +25,12 @@ Scenarios (names as printed in the table):
 * ``iterator_small`` / ``iterator_medium`` / ``iterator_large``
                         Iterator over 1,000 / 10,000 / 100,000 items, us/item
 * ``nested``            50 StateMachines nested in each other, one leaf, us/execution
+* ``nested_key``        the same, each machine declaring ``x`` as input and output key and
+                        the leaf adding 1 to it (the root is given a UserData holding
+                        ``x``), us/execution
+* ``nested_logged`` / ``nested_key_logged``
+                        the same two with loggers installed (``smach.set_loggers`` with a
+                        function that formats each line and drops it), us/execution
 * ``preempt_event``     latency request_preempt() -> execute() returns, state waits on
                         ``self.preempt_event.wait()``, ms
 * ``preempt_sleep``     the same, state in ``self.sleep(10)``, ms
@@ -34,6 +41,16 @@ Scenarios (names as printed in the table):
 * ``peer_py_trees``     py_trees Sequence(memory=True) of 1000 Success behaviours,
                         ticked once at the root, us/behaviour
 * ``peer_transitions``  ``transitions.Machine`` toggled 10,000 times, us/change
+
+Fresh processes (issue 39): one process's figure can be that process's luck (where
+its stack, its objects or its code happened to land), so by default the measurement
+runs in 6 fresh processes one after the other (``--processes N``; ``--processes 1``
+measures in this process and prints the full single-run report) and the report gives,
+for each scenario, the median of each process, the best and the worst process and
+the spread (worst / best - 1); against the original, the ratio of every cell in every
+process, the aims judged on the lowest (see core_spread.py). ``--only NAMES`` keeps
+the named scenarios (a name also keeps its ``_logged`` variant) and the bare-call
+floor; ``--cpu-time`` times the single-threaded scenarios in the thread's CPU time.
 
 With ``--original DIR`` (a checkout of ros/executive_smach) or ``--original-git URL``
 (cloned into a temporary directory in this run), the original core is measured in the
@@ -66,12 +83,13 @@ from pathlib import Path
 from typing import Any
 
 import core_compare
+import core_spread
 
 import smach
 
 # -- reference figures of the original SMACH core (measured earlier on this machine) ------------
 # Medians, same scenarios and sizes as below. Not measured by this script.
-ORIGINAL = {
+ORIGINAL: dict[str, float | tuple[float, float]] = {
     "chain": 2.5,  # us/transition, 1000-state chain
     "remap_loop": 3.8,  # us/transition, remapped 2-state loop
     "concurrence": 300.0,  # us/execution, 8 trivial children
@@ -100,6 +118,9 @@ SCENARIOS = (
     "iterator_medium",
     "iterator_large",
     "nested",
+    "nested_key",
+    "nested_logged",
+    "nested_key_logged",
     "preempt_event",
     "preempt_sleep",
     "preempt_poll",
@@ -230,11 +251,12 @@ class Bench:
 class CallBench(Bench):
     """The cost of one statement, minus the cost of the same loop running ``pass``."""
 
-    def __init__(self, name: str, what: str, stmt: str) -> None:
+    def __init__(self, name: str, what: str, stmt: str, cpu_time: bool = False) -> None:
         super().__init__(name, what, lambda: None, 1)
         env = {"f": _f, "o": _Obj()}
-        self.stmt = timeit.Timer(stmt, globals=env)
-        self.empty = timeit.Timer("pass", globals=env)
+        timer = time.thread_time if cpu_time else time.perf_counter
+        self.stmt = timeit.Timer(stmt, timer=timer, globals=env)
+        self.empty = timeit.Timer("pass", timer=timer, globals=env)
 
     def prepare(self, cfg: Config) -> None:
         number = 10_000
@@ -297,6 +319,17 @@ class Copy(smach.State):
         if self.limit is not None and value >= self.limit:
             return "done"
         return "next"
+
+
+class Bump(smach.State):
+    """Adds 1 to ``x`` (declared as input and output key)."""
+
+    def __init__(self) -> None:
+        super().__init__(outcomes=["done"], input_keys=["x"], output_keys=["x"])
+
+    def execute(self, ud: Any) -> str:
+        ud.x = ud.x + 1
+        return "done"
 
 
 class ReadItem(smach.State):
@@ -430,11 +463,57 @@ def bench_nested(cfg: Config) -> Bench:
             smach.StateMachine.add("CHILD", inner, transitions={"done": "done"})
         inner = sm
     root = inner
+    assert isinstance(root, smach.StateMachine)
 
     def run() -> None:
         assert root.execute() == "done"
 
     return Bench("nested", f"{depth} nested StateMachines + leaf", run, 1)
+
+
+def bench_nested_key(cfg: Config) -> Bench:
+    depth = cfg.nesting
+    inner: smach.State = Bump()
+    for _ in range(depth):
+        sm = smach.StateMachine(outcomes=["done"], input_keys=["x"], output_keys=["x"])
+        with sm:
+            smach.StateMachine.add("CHILD", inner, transitions={"done": "done"})
+        inner = sm
+    root = inner
+    ud = smach.UserData({"x": 0})
+
+    def run() -> None:
+        before = ud.x
+        assert root.execute(ud) == "done"
+        assert ud.x == before + 1  # the key went down every level and came back up
+
+    return Bench("nested_key", f"{depth} nested StateMachines, key x down and up", run, 1)
+
+
+def _format_line(msg: Any) -> None:
+    _line = f"[ INFO ] : {msg}"
+
+
+class LoggedBench(Bench):
+    """``bench`` with loggers installed during its own trials only (``set_loggers`` with
+    a function that formats each line and drops it: what a logger costs at least)."""
+
+    def __init__(self, bench: Bench) -> None:
+        super().__init__(f"{bench.name}_logged", f"{bench.what}, loggers", bench.fn, bench.units)
+
+    def prepare(self, cfg: Config) -> None:
+        smach.set_loggers(_format_line, _format_line, _format_line, _format_line)
+        try:
+            super().prepare(cfg)
+        finally:
+            smach.log.restore_default_loggers()
+
+    def trial(self) -> float:
+        smach.set_loggers(_format_line, _format_line, _format_line, _format_line)
+        try:
+            return super().trial()
+        finally:
+            smach.log.restore_default_loggers()
 
 
 # -- scenarios: preemption latency --------------------------------------------------------------
@@ -513,6 +592,9 @@ class _Obj:
 
 class _HSlot:
     __slots__ = ("next", "state")
+
+    next: dict[str, Any]
+    state: Trivial
 
 
 def bench_handloop(cfg: Config) -> Bench:
@@ -605,6 +687,52 @@ def fmt(value: float) -> str:
     return f"{value:.3f}"
 
 
+UNITS = {
+    "chain": "us/transition",
+    "remap_loop": "us/transition",
+    "concurrence": "us/execution",
+    "concurrence_busy": "us/execution",
+    "iterator_small": "us/item",
+    "iterator_medium": "us/item",
+    "iterator_large": "us/item",
+    "nested": "us/execution",
+    "nested_key": "us/execution",
+    "nested_logged": "us/execution",
+    "nested_key_logged": "us/execution",
+    "preempt_event": "ms",
+    "preempt_sleep": "ms",
+    "preempt_poll": "ms",
+    "call_function": "ns/call",
+    "call_method": "ns/call",
+    "handloop": "us/transition",
+    "peer_py_trees": "us/behaviour",
+    "peer_transitions": "us/change",
+}
+
+
+def table_lines(results: dict[str, Result]) -> list[str]:
+    """The table of the scenarios measured (in SCENARIOS order)."""
+    head = (
+        f"{'scenario':<18} {'size':>7}  {'unit':<14} {'median':>8} {'min':>8} {'p90':>8}"
+        f" {'calls':>7}"
+    )
+    out = [head, "-" * len(head)]
+    for name in SCENARIOS:
+        if name not in results:
+            continue
+        res = results[name]
+        scale = 1000.0 if UNITS[name].startswith("ns") else 1.0
+        size = res.size if not name.startswith("call_") else 1
+        calls = f"{res.calls:.1f}" if res.calls is not None else "-"
+        out.append(
+            f"{name:<18} {size:>7}  {UNITS[name]:<14} {fmt(res.median * scale):>8} "
+            f"{fmt(res.min * scale):>8} {fmt(res.p90 * scale):>8} {calls:>7}"
+        )
+        if name in ("nested_key_logged", "preempt_poll", "handloop"):
+            out.append("")
+    return out
+
+
 def report(results: dict[str, Result], cfg: Config, load: tuple[float, float]) -> dict[str, Any]:
     r = results
     out: list[str] = []
@@ -635,52 +763,19 @@ def report(results: dict[str, Result], cfg: Config, load: tuple[float, float]) -
         f"{cfg.preempt_trials} trials per preemption scenario"
     )
     add("")
-    head = (
-        f"{'scenario':<18} {'size':>7}  {'unit':<14} {'median':>8} {'min':>8} {'p90':>8}"
-        f" {'calls':>7}"
-    )
-    add(head)
-    add("-" * len(head))
-    units = {
-        "chain": "us/transition",
-        "remap_loop": "us/transition",
-        "concurrence": "us/execution",
-        "concurrence_busy": "us/execution",
-        "iterator_small": "us/item",
-        "iterator_medium": "us/item",
-        "iterator_large": "us/item",
-        "nested": "us/execution",
-        "preempt_event": "ms",
-        "preempt_sleep": "ms",
-        "preempt_poll": "ms",
-        "call_function": "ns/call",
-        "call_method": "ns/call",
-        "handloop": "us/transition",
-        "peer_py_trees": "us/behaviour",
-        "peer_transitions": "us/change",
-    }
-    for name in SCENARIOS:
-        res = r[name]
-        scale = 1000.0 if units[name].startswith("ns") else 1.0
-        size = res.size if not name.startswith("call_") else 1
-        calls = f"{res.calls:.1f}" if res.calls is not None else "-"
-        add(
-            f"{name:<18} {size:>7}  {units[name]:<14} {fmt(res.median * scale):>8} "
-            f"{fmt(res.min * scale):>8} {fmt(res.p90 * scale):>8} {calls:>7}"
-        )
-        if name in ("nested", "preempt_poll", "handloop"):
-            add("")
+    out += table_lines(r)
     add("")
 
     # Floors.
     add("In bare function calls ('calls' column: per round, the scenario's sample divided by")
     add("the call_function sample of the same round; median over rounds):")
-    per_level = r["nested"].median / (cfg.nesting + 1)
-    calls = r["nested"].calls
-    add(
-        f"  nested: {fmt(per_level)} us per level"
-        + (f" = {calls / (cfg.nesting + 1):.0f} calls" if calls is not None else "")
-    )
+    for name in ("nested", "nested_key", "nested_logged", "nested_key_logged"):
+        per_level = r[name].median / (cfg.nesting + 1)
+        calls = r[name].calls
+        add(
+            f"  {name}: {fmt(per_level)} us per level"
+            + (f" = {calls / (cfg.nesting + 1):.0f} calls" if calls is not None else "")
+        )
     add(
         f"  handloop (pure-Python floor of a transition) = "
         f"{fmt(r['handloop'].median)} us; chain = {r['chain'].median / r['handloop'].median:.1f}x "
@@ -706,7 +801,7 @@ def report(results: dict[str, Result], cfg: Config, load: tuple[float, float]) -
 
     # Original.
     add("Original SMACH core (constants: medians measured earlier on this machine):")
-    vs_original = []
+    vs_original: list[dict[str, Any]] = []
     for name in (
         "chain",
         "remap_loop",
@@ -716,27 +811,27 @@ def report(results: dict[str, Result], cfg: Config, load: tuple[float, float]) -
         "nested",
     ):
         ref = ORIGINAL[name]
-        ours = r[name].median
+        mine = r[name].median
         if isinstance(ref, tuple):
             lo, hi = ref
             add(
-                f"  {name:<18} original {fmt(lo)}-{fmt(hi)} {units[name]:<13} ours {fmt(ours):>8}"
-                f"  -> {lo / ours:.0f}x-{hi / ours:.0f}x faster"
+                f"  {name:<18} original {fmt(lo)}-{fmt(hi)} {UNITS[name]:<13} ours {fmt(mine):>8}"
+                f"  -> {lo / mine:.0f}x-{hi / mine:.0f}x faster"
             )
             vs_original.append(
                 {
                     "name": name,
                     "original": [lo, hi],
-                    "ours": ours,
-                    "speedup": [lo / ours, hi / ours],
+                    "ours": mine,
+                    "speedup": [lo / mine, hi / mine],
                 }
             )
         else:
             add(
-                f"  {name:<18} original {fmt(ref):>9} {units[name]:<13} ours {fmt(ours):>8}"
-                f"  -> {ref / ours:.1f}x faster"
+                f"  {name:<18} original {fmt(ref):>9} {UNITS[name]:<13} ours {fmt(mine):>8}"
+                f"  -> {ref / mine:.1f}x faster"
             )
-            vs_original.append({"name": name, "original": ref, "ours": ours, "speedup": ref / ours})
+            vs_original.append({"name": name, "original": ref, "ours": mine, "speedup": ref / mine})
     add("  preempt            original: bounded by the state's poll period (no event to wait on)")
     add("")
 
@@ -755,7 +850,7 @@ def report(results: dict[str, Result], cfg: Config, load: tuple[float, float]) -
         target(
             f"{name}: >= {factor:.0f}x faster than original",
             speedup >= factor,
-            f"{speedup:.1f}x (needs <= {fmt(ref / factor)} {units[name]}, "
+            f"{speedup:.1f}x (needs <= {fmt(ref / factor)} {UNITS[name]}, "
             f"got {fmt(r[name].median)})",
         )
     busy_lo = ORIGINAL["concurrence_busy"][0]  # type: ignore[index]
@@ -791,11 +886,23 @@ def report(results: dict[str, Result], cfg: Config, load: tuple[float, float]) -
 
 
 # -- main -----------------------------------------------------------------------------------------
+def wanted(name: str, cfg: Config) -> bool:
+    """Whether ``--only`` keeps the scenario ``name`` (all without it; always the floor)."""
+    if not cfg.only or name == "call_function":
+        return True
+    return name in cfg.only or name.removesuffix("_logged") in cfg.only
+
+
+# Throughput scenarios whose work runs in other threads too (wall time even with --cpu-time).
+THREADED = frozenset({"concurrence"})
+
+
 def run_all(cfg: Config) -> dict[str, Result]:
     progress("building the scenarios")
+    nested, nested_key = bench_nested(cfg), bench_nested_key(cfg)
     benches = [
-        CallBench("call_function", "bare function call", "f()"),
-        CallBench("call_method", "trivial method call", "o.m()"),
+        CallBench("call_function", "bare function call", "f()", cfg.cpu_time),
+        CallBench("call_method", "trivial method call", "o.m()", cfg.cpu_time),
         bench_handloop(cfg),
         bench_chain(cfg),
         bench_remap_loop(cfg),
@@ -808,21 +915,32 @@ def run_all(cfg: Config) -> dict[str, Result]:
                 strict=True,
             )
         ),
-        bench_nested(cfg),
+        nested,
+        nested_key,
+        LoggedBench(nested),
+        LoggedBench(nested_key),
         bench_py_trees(cfg),
         bench_transitions(cfg),
     ]
+    benches = [bench for bench in benches if wanted(bench.name, cfg)]
+    if cfg.cpu_time:
+        for bench in benches:
+            if bench.name not in THREADED:
+                bench.clock = time.thread_time_ns
     progress(f"throughput scenarios, {cfg.trials} interleaved rounds")
     results = run_interleaved(benches, cfg)
-    progress("concurrence with the other core busy")
-    results["concurrence_busy"] = bench_concurrence_busy(cfg)
-    progress("preemption latency")
-    for res in (
-        bench_preempt(cfg, "preempt_event", WaitEvent, "state waits on preempt_event"),
-        bench_preempt(cfg, "preempt_sleep", SleepState, "state in self.sleep(10)"),
-        bench_preempt(cfg, "preempt_poll", PollState, "state polls every 1 ms"),
-    ):
-        results[res.name] = res
+    if wanted("concurrence_busy", cfg):
+        progress("concurrence with the other core busy")
+        results["concurrence_busy"] = bench_concurrence_busy(cfg)
+    preempts = (
+        ("preempt_event", WaitEvent, "state waits on preempt_event"),
+        ("preempt_sleep", SleepState, "state in self.sleep(10)"),
+        ("preempt_poll", PollState, "state polls every 1 ms"),
+    )
+    for name, cls, what in preempts:
+        if wanted(name, cfg):
+            progress(f"preemption latency: {name}")
+            results[name] = bench_preempt(cfg, name, cls, what)
     return results
 
 
@@ -830,6 +948,14 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="small sizes, a few seconds")
     parser.add_argument("--json", metavar="FILE", help="also write the results as JSON")
+    parser.add_argument(
+        "--processes",
+        type=int,
+        default=6,
+        metavar="N",
+        help="measure in N fresh processes, one after the other, and report each "
+        "scenario's spread over them (default 6; 1: measure in this process)",
+    )
     parser.add_argument(
         "--original",
         metavar="DIR",
@@ -844,34 +970,44 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--only",
         metavar="NAMES",
-        help="with --original: only the same-run comparison, of these scenarios "
-        "(comma-separated, e.g. nested,nested_key,chain)",
+        help="only these scenarios (comma-separated, e.g. nested,nested_key,chain; a name "
+        "keeps its _logged variant too), in the table and in the comparison",
     )
     parser.add_argument(
         "--cpu-time",
         action="store_true",
-        help="time the comparison's single-threaded scenarios in thread CPU time (robust "
-        "on a loaded machine: time spent descheduled is not counted)",
+        help="time the single-threaded scenarios in thread CPU time (robust on a loaded "
+        "machine: time spent descheduled is not counted)",
     )
     args = parser.parse_args(argv)
+    if args.processes < 1:
+        parser.error("--processes needs at least 1")
     cfg = QUICK if args.quick else FULL
     if args.cpu_time:
         cfg = replace(cfg, cpu_time=True)
     if args.only:
-        if not (args.original or args.original_git):
-            parser.error("--only compares with the original: give --original or --original-git")
         cfg = replace(cfg, only=tuple(args.only.split(",")))
     with tempfile.TemporaryDirectory(prefix="core_bench-") as tmp:
         original_dir = args.original
         if args.original_git:
             progress(f"cloning {args.original_git}")
             original_dir = str(core_compare.clone(args.original_git, Path(tmp)))
+        if args.processes > 1:
+            worker = [
+                *(["--quick"] if args.quick else []),
+                *(["--cpu-time"] if args.cpu_time else []),
+            ]
+            worker += [*(["--only", args.only] if args.only else [])]
+            worker += [*(["--original", original_dir] if original_dir else [])]
+            return core_spread.run(
+                Path(__file__), worker, args.processes, cfg, args.json, progress, UNITS
+            )
         original = core_compare.load_original(Path(original_dir)) if original_dir else None
         return measure(args, cfg, original)
 
 
 def measure(args: argparse.Namespace, cfg: Config, original: Any) -> int:
-
+    """Measure in this process; print the report; write ``args.json``."""
     # No INFO logging during measurement: keep the default loggers, silence the
     # Python loggers the libraries use (smach logs INFO only when its logger is on).
     levels = {}
@@ -889,13 +1025,7 @@ def measure(args: argparse.Namespace, cfg: Config, original: Any) -> int:
         )
     started = time.perf_counter()
     try:
-        # (--only: the bare-call trial alone, for the machine's slowdown)
-        if cfg.only:  # the bare-call trial alone, for the machine's slowdown
-            results = run_interleaved(
-                [CallBench("call_function", "bare function call", "f()")], cfg
-            )
-        else:
-            results = run_all(cfg)
+        results = run_all(cfg)
         vs_original = None
         if original is not None:
             progress("the original SMACH core, same run")
@@ -907,7 +1037,11 @@ def measure(args: argparse.Namespace, cfg: Config, original: Any) -> int:
             logging.getLogger(logger_name).setLevel(level)
     load = (load_before, os.getloadavg()[0])
     progress(f"done in {time.perf_counter() - started:.1f} s")
-    summary = report(results, cfg, load) if not cfg.only else {}
+    if cfg.only:  # (the scenarios asked for; the floors, peers and targets need them all)
+        print("\n".join(["", *table_lines(results)]), flush=True)
+        summary: dict[str, Any] = {}
+    else:
+        summary = report(results, cfg, load)
     if vs_original is not None:
         slowdown = results["call_function"].median * 1000 / QUIET_CALL_NS
         lines, summary["same_run_original"] = core_compare.report(vs_original, cfg, slowdown)
@@ -918,6 +1052,7 @@ def measure(args: argparse.Namespace, cfg: Config, original: Any) -> int:
             "mode": "quick" if cfg.quick else "full",
             "python": platform.python_version(),
             "cores": os.cpu_count(),
+            "pid": os.getpid(),
             "load_average_1min": {"before": load[0], "after": load[1]},
             "config": asdict(cfg),
             "results": {name: asdict(res) for name, res in results.items()},

@@ -436,7 +436,8 @@ def paired_ratio(a: Any, b: Any) -> float:
     The trials of one round run back to back, so a machine that slows down or speeds
     up during the run (shared, virtual) changes both alike; the ratio stays put.
     """
-    ratios = sorted(x / y for x, y in zip(a.samples, b.samples, strict=True) if y > 0)
+    pairs = zip(a.samples, b.samples, strict=True)
+    ratios: list[float] = sorted(float(x) / float(y) for x, y in pairs if y > 0)
     n = len(ratios)
     return ratios[n // 2] if n % 2 else (ratios[n // 2 - 1] + ratios[n // 2]) / 2
 
