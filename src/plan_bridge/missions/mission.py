@@ -141,6 +141,10 @@ class Target:
         (:attr:`MissionSetup.planner_for`): ``inner`` itself."""
         return inner
 
+    def figures(self) -> dict[str, Any]:
+        """What loading the target took, for a run's report (none here)."""
+        return {}
+
     def setup(self, *, seed: int, fail_rate: float, variant: str = "") -> MissionSetup:
         """Skills and world for one run: the domain's ``setup()`` (or symbolic skills),
         then the folder's ``skills.toml`` on top (its :class:`SkillMap` in

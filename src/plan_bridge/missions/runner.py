@@ -128,8 +128,8 @@ class Mission:
         if knowledge is None and view is not None:
             # The whole world the view knows, not the one plan's task.
             belief = self.executive.belief.facts
-            knowledge = KnowledgeBase.from_state(
-                self.executive.task, view.objects(), belief, belief.values
+            knowledge = KnowledgeBase.from_task(
+                self.executive.task, objects=view.objects(), facts=belief, values=belief.values
             )
         elif knowledge is None:
             knowledge = KnowledgeBase.from_task(self.executive.task)
@@ -201,6 +201,7 @@ class Mission:
             data.update(
                 (key, value) for key, value in self.world.figures().items() if value is not None
             )
+        data.update(self.target.figures())
         return data
 
 

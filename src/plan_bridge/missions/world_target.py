@@ -23,7 +23,7 @@ import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from plan_bridge.errors import PlanBridgeError
 from plan_bridge.fleet.planner import FleetPlanner
@@ -57,6 +57,8 @@ class WorldTarget(Target):
     """The task view of the world's map (every run of the target shares it)."""
     load_s: float = 0.0
     """Seconds pyrobosim took to load the world file (its own cost)."""
+    task_s: float = 0.0
+    """Seconds reading the world's map and making the first task took (ours)."""
     _loaded: list[tuple[object, WorldModel]] = field(default_factory=list, repr=False)
 
     @property
@@ -104,6 +106,10 @@ class WorldTarget(Target):
     def planner_for(self, inner: Planner) -> Planner:
         """A fleet planner over ``inner`` (with one robot it plans as ``inner``)."""
         return inner if self.view is None else FleetPlanner(inner, self.view)
+
+    def figures(self) -> dict[str, Any]:
+        """pyrobosim's load of the world file, and ours: its map and first task."""
+        return {"world_load_s": round(self.load_s, 3), "task_s": round(self.task_s, 3)}
 
 
 def variant_events(folder: Path, variant: str) -> list[WorldEvent]:
@@ -170,6 +176,7 @@ def load_world_target(
     started = time.perf_counter()
     sim = load_world_file(world_file)
     load_s = time.perf_counter() - started
+    started = time.perf_counter()
     model = describe_world(sim, str(world_file))
     atoms = parse_goal(goal, model)
     scheduled = load_events(events) if events is not None else []
@@ -190,6 +197,7 @@ def load_world_target(
         from plan_bridge.planning.problem_source import problem_source
 
         prime.prime(problem_source(task).text)
+    task_s = time.perf_counter() - started
     label = folder.name if folder is not None else world_file.stem
     spec = task.spec
     return WorldTarget(
@@ -208,6 +216,7 @@ def load_world_target(
         goal_names=tuple(goals),
         view=view,
         load_s=load_s,
+        task_s=task_s,
         _loaded=[(sim, model)],
     )
 

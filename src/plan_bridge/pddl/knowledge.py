@@ -26,10 +26,9 @@ Each change increments :attr:`KnowledgeBase.version` and is passed to the listen
 (:meth:`KnowledgeBase.add_listener`) as a :class:`KnowledgeChange`, from the changing
 thread, after the change. All methods may be called from any thread (ROS callbacks).
 
-The facts and values live in a :class:`FactStore`: the knowledge base's own, or,
-once an executive uses the knowledge base, the executive's belief
-(:meth:`KnowledgeBase.use_facts`): there is one belief, which skills' effects and
-observations and the knowledge base's changes all update.
+The facts and values live in a :class:`FactStore`: its own, or the belief of the
+executive that uses it (:meth:`KnowledgeBase.use_facts`): one belief, which skills'
+effects and observations and the knowledge base's changes all update.
 """
 
 from __future__ import annotations
@@ -190,10 +189,17 @@ class KnowledgeBase:
         return kb
 
     @classmethod
-    def from_task(cls, task: PlanningTask) -> KnowledgeBase:
-        """A knowledge base holding ``task``'s problem: its objects (the domain's
-        constants aside), initial facts and numeric values, and its goal, which must
-        be a conjunction of ground atoms."""
+    def from_task(
+        cls,
+        task: PlanningTask,
+        *,
+        objects: Mapping[str, str] | None = None,
+        facts: Iterable[Fact] = (),
+        values: Mapping[Fact, float] | None = None,
+    ) -> KnowledgeBase:
+        """A knowledge base holding ``task``'s problem: its objects (constants aside),
+        facts and values (or ``objects``, name -> type, with ``facts`` and ``values``: a
+        task view's whole world), and its goal, a conjunction of ground atoms."""
         if not task.goal_is_conjunctive:
             raise KnowledgeError(
                 f"the goal of {task.name} is not a conjunction of ground atoms "
@@ -201,30 +207,18 @@ class KnowledgeBase:
             )
         kb = cls(task)
         constants = kb._domain.constants
-        kb._instances = {n: t for n, t in task.objects.items() if n not in constants}
-        kb._store = _OwnFacts(task.initial_facts, initial_values(task))
-        kb._goal = dict.fromkeys(task.goal_facts)
-        return kb
-
-    @classmethod
-    def from_state(
-        cls,
-        task: PlanningTask,
-        objects: Mapping[str, str],
-        facts: Iterable[Fact],
-        values: Mapping[Fact, float],
-    ) -> KnowledgeBase:
-        """A knowledge base of ``task``'s domain and goal holding ``objects`` (name ->
-        type), ``facts`` and ``values``: the whole world of a task view, of which the
-        task has only what one plan needs."""
-        kb = cls.from_task(task)
-        constants = kb._domain.constants
-        kb._instances = {n: t for n, t in objects.items() if n not in constants}
+        named = task.objects if objects is None else objects
+        kb._instances = {n: t for n, t in named.items() if n not in constants}
         known = {**constants, **kb._instances}
-        kb._store = _OwnFacts(
-            (f for f in facts if all(a in known for a in f[1:])),
-            {a: v for a, v in values.items() if all(n in known for n in a[1:])},
+        kb._store = (
+            _OwnFacts(task.initial_facts, initial_values(task))
+            if objects is None
+            else _OwnFacts(
+                (f for f in facts if all(a in known for a in f[1:])),
+                {a: v for a, v in (values or {}).items() if all(n in known for n in a[1:])},
+            )
         )
+        kb._goal = dict.fromkeys(task.goal_facts)
         return kb
 
     def _init(self, domain: DomainTerms, name: str) -> None:
