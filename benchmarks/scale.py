@@ -22,11 +22,12 @@ J`` in a fresh process, as a user would. Per size it prints the time of each pha
 * **ours outside**: the process's wall time minus pyrobosim's load minus the run's
   total (starting Python, imports, the map, writing the journal, stopping).
 
-``--baseline REV`` runs the same buildings, in the same run and interleaved, with the
+``--baseline REV`` runs the same sizes, in the same run and interleaved, with the
 plan_bridge of git revision REV (checked out in a temporary worktree, run with this
 environment); its buildings give the robots pyrobosim's ``world_graph`` path planner,
 which that revision's skills need (pyrobosim's load then includes building its graph:
-its cost, reported apart). ``--write`` puts the table, the plot
+its cost), and put the tables against a wall (with a table at a room's centre, where
+pyrobosim puts the ends of ``auto`` hallways, that revision's runs fail). ``--write`` puts the table, the plot
 (``docs/images/scale.png``) and the command into docs/performance.md.
 """
 
@@ -169,8 +170,18 @@ def measure(
 
 
 def _run(tmp: Path, size: Size, seed: int, fail_rate: float, old: Path | None) -> dict[str, Any]:
+    # The baseline's skills need pyrobosim's world graph, and its spots (at a room's
+    # centre for auto hallways) a room's centre free of furniture: its buildings have
+    # both; ours have neither (the harder case).
     planner = "world_graph" if old is not None else "none"
-    spec = Building(size.rooms, size.robots, size.deliveries, seed=seed, planner=planner)
+    spec = Building(
+        size.rooms,
+        size.robots,
+        size.deliveries,
+        seed=seed,
+        planner=planner,
+        table_at_centre=old is None,
+    )
     folder = write_building(tmp / f"{size}-{seed}-{planner}", spec)
     return run_once(folder, seed, fail_rate, None if old is None else old / "src")
 

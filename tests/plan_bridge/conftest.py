@@ -107,11 +107,16 @@ def doors_text() -> tuple[str, str]:
 
 
 def map_house(
-    *, hall_open: bool = True, desk_locked: bool = False, holding: str | None = None
+    *,
+    hall_open: bool = True,
+    desk_locked: bool = False,
+    holding: str | None = None,
+    rover: bool = False,
 ) -> Any:
     """A world model built by hand (no pyrobosim): two rooms joined by a hallway, a desk
-    (one spawn) in the kitchen, a shelf in the bedroom; a robot in the kitchen, an apple
-    on the desk, a pear on the shelf."""
+    (one spawn) in the kitchen, a shelf in the bedroom; a robot in the kitchen (and,
+    with ``rover``, a second robot in the bedroom), an apple on the desk, a pear on
+    the shelf."""
     from plan_bridge.maps.model import Gate, Hall, Place, RobotInfo, WorldModel
 
     places = {
@@ -156,9 +161,12 @@ def map_house(
     }
     kinds = {"kitchen": "room", "bedroom": "room", "desk_top": "spawn", "shelf_top": "spawn"}
     kinds |= {"corridor_door_kitchen": "door", "corridor_door_bedroom": "door"}
+    robots = (RobotInfo("robot", "kitchen", 90.0, 1.0, 0.5, holding),)
+    if rover:
+        robots = (*robots, RobotInfo("rover", "bedroom", 90.0, 1.0, 0.5))
     return WorldModel(
         "house",
-        (RobotInfo("robot", "kitchen", 90.0, 1.0, 0.5, holding),),
+        robots,
         places,
         gates,
         halls,

@@ -29,6 +29,7 @@ __all__ = [
     "footprints",
     "is_temporal",
     "precedence",
+    "retimed",
 ]
 
 #: Plan times closer than this are the same instant (engines separate by epsilon).
@@ -151,6 +152,41 @@ def precedence(
             else:
                 waits[j].append(Edge(i, j, "start", max(0.0, starts[j] - starts[i])))
     return waits
+
+
+def retimed(
+    steps: Sequence[PlanStep], model: ActionModel, durations: Sequence[float | None]
+) -> list[PlanStep]:
+    """``steps`` with ``durations`` (one per step), each started as early as the plan's
+    order allows: after the end of every earlier step it interferes with that the plan
+    ran before it (a millisecond after, at most, as the planner separated them), or at
+    the planned lag from the start of one it overlapped. What a plan keeps after some
+    of its steps were dropped or merged, without the gaps they leave."""
+    prints = footprints(steps, model)
+    starts, ends = _times(steps)
+    order = sorted(range(len(steps)), key=lambda i: (starts[i], i))
+    begin: dict[int, float] = {}
+    finish: dict[int, float] = {}
+    for position, j in enumerate(order):
+        earliest = 0.0
+        for i in order[:position]:
+            if not _interfere(prints[i], prints[j]):
+                continue
+            if starts[j] >= ends[i] - EPSILON:
+                gap = min(max(0.0, starts[j] - ends[i]), _SEPARATION)
+                earliest = max(earliest, finish[i] + gap)
+            else:
+                earliest = max(earliest, begin[i] + max(0.0, starts[j] - starts[i]))
+        begin[j] = earliest
+        finish[j] = earliest + (durations[j] or 0.0)
+    return [
+        PlanStep(step.action, step.arguments, round(begin[i], 6), durations[i])
+        for i, step in enumerate(steps)
+    ]
+
+
+#: The most a retimed plan keeps between dependent points (planners separate them).
+_SEPARATION = 0.001
 
 
 def _times(steps: Sequence[PlanStep]) -> tuple[list[float], list[float]]:

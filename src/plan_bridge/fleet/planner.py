@@ -42,6 +42,7 @@ from plan_bridge.execution.semantics import ActionModel
 from plan_bridge.execution.task_view import project
 from plan_bridge.execution.world import FactSnapshot
 from plan_bridge.fleet.jobs import Job, allocate, jobs_of
+from plan_bridge.maps.plans import tidied
 from plan_bridge.maps.tasks import RouteTasks
 from plan_bridge.pddl.task import Fact, FactLike, PlanningTask, parse_fact
 from plan_bridge.planning.types import (
@@ -129,7 +130,7 @@ class FleetPlanner:
         options: dict[str, Any] = {"timeout": timeout, "initial_state": state, "goal": atoms}
         if cancel is not None and accepts_cancel(self.inner):
             options["cancel"] = cancel
-        return self.inner.solve(task, **options)
+        return self._tidied(self.inner.solve(task, **options), task, state)
 
     def _solve_part(
         self, robots: Sequence[str], jobs: Sequence[Job], plan: _Planning
@@ -137,13 +138,22 @@ class FleetPlanner:
         """The task of ``jobs`` for ``robots`` alone, planned by the inner planner."""
         atoms = tuple(atom for job in jobs for atom in job.atoms)
         task = self.view.task_for(plan.facts, atoms, robots=robots, closed=plan.closed)
-        options: dict[str, Any] = {
-            "timeout": max(plan.left(), 0.05),
-            "initial_state": project(plan.facts, task),
-        }
+        state = project(plan.facts, task)
+        options: dict[str, Any] = {"timeout": max(plan.left(), 0.05), "initial_state": state}
         if plan.cancel is not None and accepts_cancel(self.inner):
             options["cancel"] = plan.cancel
-        return self.inner.solve(task, **options)
+        return self._tidied(self.inner.solve(task, **options), task, state)
+
+    def _tidied(self, result: PlanResult, task: PlanningTask, state: FactSnapshot) -> PlanResult:
+        """``result`` with its robots' successive drives merged (:mod:`plan_bridge.maps.plans`)."""
+        if not result.solved:
+            return result
+        steps = tidied(result.actions, task, state, self._model(task))
+        if len(steps) == len(result.actions):
+            return result
+        dropped = len(result.actions) - len(steps)
+        note = f"{dropped} drive(s) to and fro merged into the drives they were part of"
+        return dataclasses.replace(result, actions=steps, warnings=(*result.warnings, note))
 
     # -- robots together ------------------------------------------------------------
     def _nearest(self, job: Job, robots: Sequence[str], plan: _Planning) -> list[str]:

@@ -15,8 +15,8 @@
   (:requirements :strips :typing :durative-actions :numeric-fluents)
   (:types
     bot item - thing
-    spot
-    hall fixture - gate)
+    hall fixture - gate
+    spot)
   (:predicates
     (At ?x - thing ?s - spot)
     (Holding ?r - bot ?o - item)

@@ -102,3 +102,16 @@ def test_a_goal_the_world_blocks_is_refused_with_what_blocks_it(
     err = capsys.readouterr().err
     assert code == 2
     assert "cannot get from kitchen to bedroom" in err and "closed and locked" in err
+
+
+def test_a_goal_of_the_folder_is_named_by_goal_as_by_problem(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    assert main(["problem", str(FETCH), "--goal", "open_fridge"]) == 0
+    by_goal = capsys.readouterr().out
+    assert main(["problem", str(FETCH), "--problem", "open_fridge"]) == 0
+    assert capsys.readouterr().out == by_goal
+    assert "(:goal (and (isopen fridge)))" in by_goal
+    assert main(["problem", str(FETCH), "--goal", "open_frige"]) == 2
+    err = capsys.readouterr().err
+    assert "not a goal atom" in err and "did you mean open_fridge?" in err

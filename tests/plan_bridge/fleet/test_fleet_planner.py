@@ -1,0 +1,69 @@
+"""Planning a fleet robot by robot: plans side by side, kept where they still hold."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+
+from plan_bridge.execution.semantics import ActionModel
+from plan_bridge.execution.world import FactSnapshot
+from plan_bridge.fleet.planner import FleetPlanner
+from plan_bridge.maps.tasks import RouteTasks
+from plan_bridge.planning.planner import UPPlanner
+from plan_bridge.planning.worker import WorkerPool
+
+pytestmark = pytest.mark.timeout(120)
+
+SWAP = [("at", "apple", "shelf_top"), ("at", "pear", "desk_top")]
+
+
+@pytest.fixture
+def kairos() -> Any:
+    pool = WorkerPool(max_workers=2)
+    yield UPPlanner("kairos", pool=pool)
+    pool.close()
+
+
+def start(task: Any) -> FactSnapshot:
+    return FactSnapshot(task.initial_facts, ActionModel(task).initial_values())
+
+
+def test_two_robots_plan_apart_and_work_side_by_side(kairos: Any, house: Any) -> None:
+    view = RouteTasks(house(rover=True))
+    task = view.task_for(view.belief(), SWAP)
+    fleet = FleetPlanner(kairos, view)
+    result = fleet.solve(task, timeout=30)
+    assert result.solved and result.planner == "kairos"
+    robots = {step.arguments[0] for step in result.actions}
+    assert robots == {"robot", "rover"}
+    # Each robot carries one object: both start at time 0.
+    firsts = {r: min(s.start or 0.0 for s in result.actions if s.arguments[0] == r) for r in robots}
+    assert firsts == {"robot": 0.0, "rover": 0.0}
+    assert ActionModel(task).check_plan(result.actions, start(task)).valid
+
+
+def test_a_robot_whose_plan_still_holds_keeps_it(kairos: Any, house: Any) -> None:
+    view = RouteTasks(house(rover=True))
+    task = view.task_for(view.belief(), SWAP)
+    fleet = FleetPlanner(kairos, view)
+    first = fleet.solve(task, timeout=30)
+    again = fleet.solve(task, timeout=30)
+    assert again.solved and again.planner == "kept"
+    assert "2 of 2 robots kept their plans" in again.warnings
+    assert [str(s) for s in again.actions] == [str(s) for s in first.actions]
+
+
+def test_one_job_is_planned_with_the_two_nearest_robots(kairos: Any, house: Any) -> None:
+    view = RouteTasks(house(rover=True))
+    task = view.task_for(view.belief(), [("at", "pear", "desk_top")])
+    result = FleetPlanner(kairos, view).solve(task, timeout=30)
+    assert result.solved
+    assert ActionModel(task).check_plan(result.actions, start(task)).valid
+
+
+def test_one_robot_is_planned_as_the_inner_planner_does(kairos: Any, house: Any) -> None:
+    view = RouteTasks(house())
+    task = view.task_for(view.belief(), SWAP)
+    result = FleetPlanner(kairos, view).solve(task, timeout=30)
+    assert result.solved and {s.arguments[0] for s in result.actions} == {"robot"}
