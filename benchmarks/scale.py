@@ -148,14 +148,16 @@ def measure(
     load_before = os.getloadavg()
     started = time.monotonic()
     rows: list[dict[str, Any]] = []
-    with tempfile.TemporaryDirectory(prefix="scale-buildings-") as tmp, _worktree(baseline) as old:
+    with tempfile.TemporaryDirectory(prefix="scale-buildings-") as tmp, _Worktree(baseline) as old:
         for size in sizes:
             for seed in seeds:
                 runs = {"ours": _run(Path(tmp), size, seed, fail_rate, None)}
                 if old is not None and (size.rooms, size.robots, size.deliveries) in BASELINE_SIZES:
                     runs["baseline"] = _run(Path(tmp), size, seed, fail_rate, old)
                 for who, result in runs.items():
-                    rows.append({"size": str(size), **vars(size), "seed": seed, "who": who, **result})
+                    rows.append(
+                        {"size": str(size), **vars(size), "seed": seed, "who": who, **result}
+                    )
                     out(_line(rows[-1]))
     return {
         "fail_rate": fail_rate,
@@ -186,7 +188,7 @@ def _run(tmp: Path, size: Size, seed: int, fail_rate: float, old: Path | None) -
     return run_once(folder, seed, fail_rate, None if old is None else old / "src")
 
 
-class _worktree:
+class _Worktree:
     """A temporary git worktree of revision ``rev`` (None: nothing)."""
 
     def __init__(self, rev: str | None) -> None:
@@ -326,7 +328,9 @@ def main() -> None:
     result = measure(sizes, seeds, args.fail_rate, args.baseline)
     print()
     print(table(result))
-    print(f"\nwall {result['wall_s']} s, load average {result['load_before']} -> {result['load_after']}")
+    print(
+        f"\nwall {result['wall_s']} s, load average {result['load_before']} -> {result['load_after']}"
+    )
     if args.json is not None:
         args.json.write_text(json.dumps(result, indent=1), encoding="utf-8")
     if args.write:

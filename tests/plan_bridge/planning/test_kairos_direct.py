@@ -64,7 +64,7 @@ class _Base:
     problem_text = "(define (problem q) (:domain odd) (:init) (:goal (p)))"
     spec = None
     kairos = None
-    true_atoms: dict[tuple[str, ...], Any] = {}  # noqa: RUF012
+    true_atoms: dict[tuple[str, ...], Any] = {}
 
 
 def test_a_domain_kairos_does_not_read_is_left_to_unified_planning() -> None:
