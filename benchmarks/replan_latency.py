@@ -2,7 +2,8 @@
 
 Usage::
 
-    .venv/bin/python benchmarks/replan_latency.py                 # 5 seeds, 4 missions
+    .venv/bin/python benchmarks/replan_latency.py                 # 5 seeds, 8 missions
+    .venv/bin/python benchmarks/replan_latency.py --baseline 0474866  # temporal: vs an old revision
     .venv/bin/python benchmarks/replan_latency.py --seeds 10 --json latency.json
     .venv/bin/python benchmarks/replan_latency.py --quick         # smoke test
 
@@ -19,9 +20,13 @@ issue's measurement). Per mission and planner it reports:
   fresh Fast Downward process (translate, then search), measured in the same run
   with the runs interleaved (same seeds, same load), and their ratio.
 
-``auto`` is the default planner: for these classical missions it is the warm search
-in the planner worker (:mod:`plan_bridge.planning.warm`). The last line pools every
-call of every mission per planner (the issue's target: p50 <= 50 ms, p95 <= 150 ms).
+``auto`` is the default planner: for the classical missions it is the warm search in
+the planner worker (:mod:`plan_bridge.planning.warm`), for the temporal ones (timed
+courier and the pyrobosim missions) Kairos in the planner worker without
+unified-planning's round trip (:mod:`plan_bridge.planning.kairos_direct`); Fast
+Downward does not plan those, so ``--baseline REV`` runs them with an older revision
+of plan_bridge too, in the same run. The last line pools every call of every mission
+per planner (the target: p50 <= 50 ms, p95 <= 150 ms).
 The load average is printed before and after: other work on the machine slows both
 planners.
 
@@ -48,6 +53,9 @@ from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
 MISSIONS = ("fetch_drink", "door_opening", "table_clearing", "recharge")
+#: Temporal missions (durative actions; Fast Downward does not plan them): planned by
+#: ``auto`` (Kairos in the planner process), compared with ``--baseline REV``.
+TEMPORAL = ("timed_courier", "robosim_fetch", "robosim_house", "robosim_two_robots")
 PLANNERS = ("auto", "fast-downward")
 FRESH = "fast-downward"
 _STEP_STATE = re.compile(r"^/ROOT/PLAN/\d+_[^/]*$")
@@ -86,8 +94,11 @@ def journal_times(lines: list[dict[str, Any]]) -> tuple[list[float], list[float]
     return calls, waits
 
 
-def run_mission(mission: str, planner: str, seed: int, fail_rate: float) -> dict[str, Any]:
-    """One ``plan-bridge run`` in a fresh process: its JSON summary and journal times."""
+def run_mission(
+    mission: str, planner: str, seed: int, fail_rate: float, source: Path | None = None
+) -> dict[str, Any]:
+    """One ``plan-bridge run`` in a fresh process: its JSON summary and journal times
+    (``source``: the ``src`` folder of another revision's plan_bridge, run instead)."""
     with tempfile.TemporaryDirectory(prefix="replan-latency-") as tmp:
         journal = Path(tmp) / "journal.jsonl"
         command = [
@@ -104,10 +115,13 @@ def run_mission(mission: str, planner: str, seed: int, fail_rate: float) -> dict
             "--journal",
             str(journal),
         ]
-        if not Path(command[0]).exists():
-            command[:1] = [sys.executable, "-m", "plan_bridge.cli"]
+        env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
+        if source is not None or not Path(command[0]).exists():
+            command[:1] = [sys.executable, "-m", "plan_bridge"]
+        if source is not None:
+            env["PYTHONPATH"] = str(source)
         proc = subprocess.run(
-            command, cwd=ROOT, capture_output=True, text=True, timeout=600, check=False
+            command, cwd=ROOT, capture_output=True, text=True, timeout=600, check=False, env=env
         )
         if proc.returncode not in (0, 1):  # 1: the mission did not reach its goal
             raise RuntimeError(f"{' '.join(command)} failed:\n{proc.stderr[-2000:]}")
@@ -116,7 +130,7 @@ def run_mission(mission: str, planner: str, seed: int, fail_rate: float) -> dict
     calls, waits = journal_times(events)
     return {
         "mission": mission,
-        "planner": planner,
+        "planner": planner if source is None else f"{planner}@baseline",
         "seed": seed,
         "outcome": summary["outcome"],
         "planner_calls": summary["planner_calls"],
@@ -156,25 +170,38 @@ def summarise(runs: list[dict[str, Any]]) -> dict[str, Any]:
 
 
 def measure(
-    missions: tuple[str, ...], planners: tuple[str, ...], seeds: int, fail_rate: float
+    missions: tuple[str, ...],
+    planners: tuple[str, ...],
+    seeds: int,
+    fail_rate: float,
+    baseline: str | None = None,
 ) -> dict[str, Any]:
+    from revision import Worktree
+
     load_before = os.getloadavg()
     started = time.monotonic()
     runs: list[dict[str, Any]] = []
-    for mission in missions:
-        for seed in range(1, seeds + 1):
-            for planner in planners:  # interleaved: both planners see the same load
-                runs.append(run_mission(mission, planner, seed, fail_rate))
+    with Worktree(baseline) as old:
+        for mission in missions:
+            chosen = ("auto",) if mission in TEMPORAL else planners
+            for seed in range(1, seeds + 1):
+                for planner in chosen:  # interleaved: the planners see the same load
+                    runs.append(run_mission(mission, planner, seed, fail_rate))
+                if old is not None and mission in TEMPORAL:
+                    runs.append(run_mission(mission, "auto", seed, fail_rate, old / "src"))
+    labels = list(dict.fromkeys(run["planner"] for run in runs))
     rows = []
     for mission in (*missions, "all"):
-        for planner in planners:
-            chosen = [
-                r for r in runs if r["planner"] == planner and mission in ("all", r["mission"])
+        for label in labels:
+            chosen_runs = [
+                r for r in runs if r["planner"] == label and mission in ("all", r["mission"])
             ]
-            rows.append({"mission": mission, "planner": planner, **summarise(chosen)})
+            if chosen_runs:
+                rows.append({"mission": mission, "planner": label, **summarise(chosen_runs)})
     return {
         "fail_rate": fail_rate,
         "seeds": seeds,
+        "baseline": baseline,
         "cpus": os.cpu_count(),
         "load_before": [round(x, 2) for x in load_before],
         "load_after": [round(x, 2) for x in os.getloadavg()],
@@ -264,10 +291,12 @@ def print_table(results: dict[str, Any], out: Any = print) -> None:
         f"{'fails':>6}{'f->n p50':>10}{'f->n p95':>10}{'FD/this p50':>13}{'f->n ratio':>12}"
     )
     fresh = {row["mission"]: row for row in results["rows"] if row["planner"] == FRESH}
+    older = {row["mission"]: row for row in results["rows"] if row["planner"].endswith("@baseline")}
     for row in results["rows"]:
-        base = fresh.get(row["mission"])
+        base = fresh.get(row["mission"]) if row["mission"] not in TEMPORAL else None
+        base = base or (older.get(row["mission"]) if row["mission"] in TEMPORAL else None)
         ratio = wait_ratio = "-"
-        if base is not None and row["planner"] != FRESH and row["call_p50_s"] > 0:
+        if base is not None and base is not row and row["call_p50_s"] > 0:
             ratio = f"x{base['call_p50_s'] / row['call_p50_s']:.1f}"
             if row["fail_to_next_p50_s"] > 0:
                 wait_ratio = f"x{base['fail_to_next_p50_s'] / row['fail_to_next_p50_s']:.1f}"
@@ -277,7 +306,10 @@ def print_table(results: dict[str, Any], out: Any = print) -> None:
             f"{_ms(row['fail_to_next_p50_s']):>10}{_ms(row['fail_to_next_p95_s']):>10}"
             f"{ratio:>13}{wait_ratio:>12}"
         )
-    out("times in ms; FD/this: a fresh Fast Downward process per call, same run, over this")
+    out(
+        "times in ms; FD/this: a fresh Fast Downward process per call (for temporal "
+        "missions: the baseline revision), same run, over this"
+    )
     for row in results["rows"]:
         if row["mission"] == "all":
             won = ", ".join(f"{k} {v}" for k, v in sorted(row["planners_won"].items()))
@@ -292,10 +324,13 @@ def print_table(results: dict[str, Any], out: Any = print) -> None:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=5, help="seeds 1..N per mission")
-    parser.add_argument("--missions", default=",".join(MISSIONS))
+    parser.add_argument("--missions", default=",".join((*MISSIONS, *TEMPORAL)))
     parser.add_argument("--planners", default=",".join(PLANNERS))
     parser.add_argument("--fail-rate", type=float, default=0.3)
     parser.add_argument("--quick", action="store_true", help="1 seed of fetch_drink")
+    parser.add_argument(
+        "--baseline", metavar="REV", help="also run the temporal missions with revision REV"
+    )
     parser.add_argument("--json", metavar="FILE", help="write the results as JSON")
     parser.add_argument(
         "--ipc",
@@ -309,7 +344,9 @@ def main(argv: list[str] | None = None) -> int:
     seeds = args.seeds
     if args.quick:
         missions, seeds = ("fetch_drink",), 1
-    results = measure(missions, tuple(args.planners.split(",")), seeds, args.fail_rate)
+    results = measure(
+        missions, tuple(args.planners.split(",")), seeds, args.fail_rate, args.baseline
+    )
     print_table(results)
     if args.ipc:
         sys.path.insert(0, str(ROOT / "src"))

@@ -22,12 +22,15 @@ J`` in a fresh process, as a user would. Per size it prints the time of each pha
 * **ours outside**: the process's wall time minus pyrobosim's load minus the run's
   total (starting Python, imports, the map, writing the journal, stopping).
 
-``--baseline REV`` runs the same sizes, in the same run and interleaved, with the
+``--baseline REV`` plans the same sizes, in the same run and interleaved, with the
 plan_bridge of git revision REV (checked out in a temporary worktree, run with this
-environment); its buildings give the robots pyrobosim's ``world_graph`` path planner,
-which that revision's skills need (pyrobosim's load then includes building its graph:
-its cost), and put the tables against a wall (with a table at a room's centre, where
-pyrobosim puts the ends of ``auto`` hallways, that revision's runs fail). ``--write`` puts the table, the plot
+environment): ``plan-bridge plan BUILDING --json`` (its problem of every spot of the
+building; its *1st plan* is that planning time, its *wall* the whole command). Its
+buildings give the robots pyrobosim's ``world_graph`` path planner, which that
+revision needs (its wall time then includes building the graph, pyrobosim's cost), and
+put the tables against a wall; that revision's runs still fail on them (its drives
+depend on pyrobosim's planner, which finds no path into some corners), so only its
+planning is compared. ``--write`` puts the table, the plot
 (``docs/images/scale.png``) and the command into docs/performance.md.
 """
 
@@ -47,6 +50,8 @@ from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
+
+from revision import Worktree  # noqa: E402
 
 from plan_bridge.robosim.buildings import Building, write_building  # noqa: E402
 
@@ -79,14 +84,9 @@ class Size:
         return f"{self.rooms}x{self.robots}x{self.deliveries}"
 
 
-def run_once(
-    folder: Path, seed: int, fail_rate: float, source: Path | None = None
-) -> dict[str, Any]:
-    """One ``plan-bridge run`` of ``folder`` in a fresh process (``source``: the
-    ``src`` folder of another plan_bridge to run instead)."""
+def run_once(folder: Path, seed: int, fail_rate: float) -> dict[str, Any]:
+    """One ``plan-bridge run`` of ``folder`` in a fresh process."""
     env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
-    if source is not None:
-        env["PYTHONPATH"] = str(source)
     with tempfile.TemporaryDirectory(prefix="scale-") as tmp:
         journal = Path(tmp) / "run.jsonl"
         command = [
@@ -148,7 +148,7 @@ def measure(
     load_before = os.getloadavg()
     started = time.monotonic()
     rows: list[dict[str, Any]] = []
-    with tempfile.TemporaryDirectory(prefix="scale-buildings-") as tmp, _Worktree(baseline) as old:
+    with tempfile.TemporaryDirectory(prefix="scale-buildings-") as tmp, Worktree(baseline) as old:
         for size in sizes:
             for seed in seeds:
                 runs = {"ours": _run(Path(tmp), size, seed, fail_rate, None)}
@@ -171,6 +171,33 @@ def measure(
     }
 
 
+def plan_once(folder: Path, source: Path) -> dict[str, Any]:
+    """``plan-bridge plan`` of ``folder`` by the plan_bridge of ``source`` (a fresh
+    process): its planning time, and the process's wall time."""
+    env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST", PYTHONPATH=str(source))
+    command = [sys.executable, "-m", "plan_bridge", "plan", str(folder), "--json"]
+    started = time.perf_counter()
+    proc = subprocess.run(
+        command, capture_output=True, text=True, timeout=3600, env=env, check=False
+    )
+    wall = time.perf_counter() - started
+    if proc.returncode not in (0, 1):
+        raise RuntimeError(f"{' '.join(command)} failed:\n{proc.stderr[-3000:]}")
+    figures = json.loads(proc.stdout)
+    planning = float(figures["planning_time_s"])
+    row = dict.fromkeys(("load_s", "task_s", "replans_s", "execution_s", "ours_outside_s"), 0.0)
+    return {
+        **row,
+        "outcome": "succeeded" if figures["status"] == "solved" else figures["status"],
+        "wall_s": wall,
+        "first_plan_s": planning,
+        "planning_s": planning,
+        "total_s": planning,
+        "replans": 0,
+        "steps": int(figures["plan_length"]),
+    }
+
+
 def _run(tmp: Path, size: Size, seed: int, fail_rate: float, old: Path | None) -> dict[str, Any]:
     # The baseline's skills need pyrobosim's world graph, and its spots (at a room's
     # centre for auto hallways) a room's centre free of furniture: its buildings have
@@ -185,36 +212,9 @@ def _run(tmp: Path, size: Size, seed: int, fail_rate: float, old: Path | None) -
         table_at_centre=old is None,
     )
     folder = write_building(tmp / f"{size}-{seed}-{planner}", spec)
-    return run_once(folder, seed, fail_rate, None if old is None else old / "src")
-
-
-class _Worktree:
-    """A temporary git worktree of revision ``rev`` (None: nothing)."""
-
-    def __init__(self, rev: str | None) -> None:
-        self.rev = rev
-        self.path: Path | None = None
-
-    def __enter__(self) -> Path | None:
-        if self.rev is None:
-            return None
-        self.path = Path(tempfile.mkdtemp(prefix="scale-baseline-"))
-        subprocess.run(
-            ["git", "worktree", "add", "--detach", str(self.path), self.rev],
-            cwd=ROOT,
-            check=True,
-            capture_output=True,
-        )
-        return self.path
-
-    def __exit__(self, *exc: object) -> None:
-        if self.path is not None:
-            subprocess.run(
-                ["git", "worktree", "remove", "--force", str(self.path)],
-                cwd=ROOT,
-                check=False,
-                capture_output=True,
-            )
+    if old is not None:
+        return plan_once(folder, old / "src")
+    return run_once(folder, seed, fail_rate)
 
 
 COLUMNS = (

@@ -107,12 +107,13 @@ def _load(
     def choose() -> None:
         planners.append(get_planner(args.planner))
 
-    if chosen.world is not None:  # a pyrobosim world: the generated problem
+    if chosen.world is not None:  # a pyrobosim world: the task of its map, as run plans it
         from plan_bridge.missions.mission import load_target
 
-        task = load_target(
+        target = load_target(
             args.target, problem, goal=args.goal, prime=default_pool(), before_parse=choose
-        ).task
+        )
+        task, planners[0] = target.task, target.planner_for(planners[0])
     elif goal is not None:  # the goal given at run time, in place of the problem's
         from plan_bridge.missions.given_goal import load_task_with_goal
 
