@@ -51,6 +51,10 @@ the spread (worst / best - 1); against the original, the ratio of every cell in 
 process, the aims judged on the lowest (see core_spread.py). ``--only NAMES`` keeps
 the named scenarios (a name also keeps its ``_logged`` variant) and the bare-call
 floor; ``--cpu-time`` times the single-threaded scenarios in the thread's CPU time.
+``--stack-sweep`` runs the nesting scenarios (and a 200-state chain, a flat loop, for
+reference) from callers 0 to 160 frames deeper, in one process, with the page faults of
+an execution at each depth: where a run's speed depends on where it is called from,
+that table shows it.
 
 With ``--original DIR`` (a checkout of ros/executive_smach) or ``--original-git URL``
 (cloned into a temporary directory in this run), the original core is measured in the
@@ -72,6 +76,7 @@ import multiprocessing
 import os
 import platform
 import random
+import resource
 import sys
 import tempfile
 import threading
@@ -944,6 +949,75 @@ def run_all(cfg: Config) -> dict[str, Result]:
     return results
 
 
+def _deeper(frames: int, fn: Callable[[], float]) -> float:
+    """``fn()`` called ``frames`` Python frames deeper than here."""
+    return _deeper(frames - 1, fn) if frames else fn()
+
+
+STACK_DEPTHS = range(0, 161, 4)  # (a frame of _deeper: 80 bytes; a chunk: 16 KiB)
+
+
+def stack_sweep(cfg: Config, json_out: str | None) -> int:
+    """The nesting scenarios, each run from a caller ``k`` frames deeper (issue 39).
+
+    A run whose Python frames span a boundary of CPython's frame stack (16 KiB chunks,
+    a chunk freed as soon as the frame at its base returns) pays an ``mmap``, a
+    ``munmap`` and page faults on every execution, more where calls are made right at
+    the boundary; where the boundaries fall depends on how deep the caller is. So the
+    cost of one scenario at each caller depth, and its minor page faults per execution
+    (``getrusage``), show whether a run's speed depends on where it is called from.
+    """
+    nested, nested_key = bench_nested(cfg), bench_nested_key(cfg)
+    benches = [nested, nested_key, LoggedBench(nested), LoggedBench(nested_key)]
+    benches.append(bench_chain(replace(cfg, chain=200)))  # (a flat loop, for reference)
+    trials = 3
+    rows: list[dict[str, Any]] = []
+    for bench in benches:
+        bench.prepare(cfg)
+    for depth in STACK_DEPTHS:
+        row: dict[str, Any] = {"depth": depth}
+        for bench in benches:
+
+            def timed(bench: Bench = bench, row: dict[str, Any] = row) -> float:
+                bench.trial()  # (warm at this depth)
+                before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+                best = min(bench.trial() for _ in range(trials))
+                faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before
+                row[f"{bench.name}_faults"] = faults / (trials * bench.reps * bench.units)
+                return best
+
+            row[bench.name] = _deeper(depth, timed)
+        rows.append(row)
+        progress(f"caller {depth} frames deeper: done")
+    head = f"{'caller depth':>12}" + "".join(f" {b.name + ' us (faults)':>26}" for b in benches)
+    lines = [
+        "",
+        f"Nesting scenarios by caller stack depth (best of {trials} trials; minor page faults "
+        "per execution in parentheses):",
+        "",
+        head,
+        "-" * len(head),
+    ]
+    for row in rows:
+        cells = "".join(
+            f" {fmt(row[b.name]):>17} ({row[b.name + '_faults']:>6.2f})" for b in benches
+        )
+        lines.append(f"{row['depth']:>12}{cells}")
+    lines.append("")
+    for bench in benches:
+        values = [row[bench.name] for row in rows]
+        faulty = sum(1 for row in rows if row[bench.name + "_faults"] >= 0.5)
+        lines.append(
+            f"  {bench.name:<18} median {fmt(sorted(values)[len(values) // 2])}, best "
+            f"{fmt(min(values))}, worst {fmt(max(values))} us ({max(values) / min(values) - 1:.0%}"
+            f" over the best); page faults at {faulty} of {len(rows)} depths"
+        )
+    print("\n".join(lines), flush=True)
+    if json_out:
+        Path(json_out).write_text(json.dumps({"stack_sweep": rows}, indent=2), encoding="utf-8")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="small sizes, a few seconds")
@@ -979,7 +1053,15 @@ def main(argv: list[str] | None = None) -> int:
         help="time the single-threaded scenarios in thread CPU time (robust on a loaded "
         "machine: time spent descheduled is not counted)",
     )
+    parser.add_argument(
+        "--stack-sweep",
+        action="store_true",
+        help="only the nesting scenarios and a flat chain, each run from callers 0, 4, ..., "
+        "160 frames deep in this process: us and page faults per execution at each depth",
+    )
     args = parser.parse_args(argv)
+    if args.stack_sweep:
+        return stack_sweep(QUICK if args.quick else FULL, args.json)
     if args.processes < 1:
         parser.error("--processes needs at least 1")
     cfg = QUICK if args.quick else FULL
