@@ -9,7 +9,7 @@ Usage::
 The hook is in ``Container.step_child``, which a step reaches only when somebody
 watches it (a controller subscribes to the tree, so a controlled tree is watched). On
 an unwatched step, what remains of it is the test
-``if watched or log_steps or self._preempt_requested`` in
+``if watched or log_steps or sm._preempt_requested`` in
 ``StateMachine.run_children`` (smach/state_machine.py) that decides whether a step
 goes through ``step_child``. To measure that, the working tree's ``StateMachine`` is
 loaded twice into this process: as it is, and with that test replaced by ``False``
@@ -41,7 +41,7 @@ import smach
 from smach.control import Controller
 
 ROOT = Path(__file__).resolve().parents[1]
-HOOK_TEST = "watched or log_steps or self._preempt_requested"
+HOOK_TEST = "watched or log_steps or sm._preempt_requested"
 
 
 class Trivial(smach.State):
