@@ -50,6 +50,7 @@ from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
+sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from revision import Worktree  # noqa: E402
 
@@ -84,34 +85,29 @@ class Size:
         return f"{self.rooms}x{self.robots}x{self.deliveries}"
 
 
+def plan_bridge(args: list[str], source: Path | None = None) -> tuple[dict[str, Any], float]:
+    """``plan-bridge ARGS --json`` in a fresh process (``source``: the ``src`` folder of
+    another plan_bridge to run): its JSON, and the process's wall time."""
+    env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
+    if source is not None:
+        env["PYTHONPATH"] = str(source)
+    command = [sys.executable, "-m", "plan_bridge", *args, "--json"]
+    started = time.perf_counter()
+    proc = subprocess.run(
+        command, capture_output=True, text=True, timeout=3600, env=env, check=False
+    )
+    wall = time.perf_counter() - started
+    if proc.returncode not in (0, 1):
+        raise RuntimeError(f"{' '.join(command)} failed:\n{proc.stderr[-3000:]}")
+    return json.loads(proc.stdout), wall
+
+
 def run_once(folder: Path, seed: int, fail_rate: float) -> dict[str, Any]:
     """One ``plan-bridge run`` of ``folder`` in a fresh process."""
-    env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
     with tempfile.TemporaryDirectory(prefix="scale-") as tmp:
         journal = Path(tmp) / "run.jsonl"
-        command = [
-            sys.executable,
-            "-m",
-            "plan_bridge",
-            "run",
-            str(folder),
-            "--seed",
-            str(seed),
-            "--fail-rate",
-            str(fail_rate),
-            "--json",
-            "--quiet",
-            "--journal",
-            str(journal),
-        ]
-        started = time.perf_counter()
-        proc = subprocess.run(
-            command, capture_output=True, text=True, timeout=3600, env=env, check=False
-        )
-        wall = time.perf_counter() - started
-        if proc.returncode not in (0, 1):
-            raise RuntimeError(f"{' '.join(command)} failed:\n{proc.stderr[-3000:]}")
-        figures = json.loads(proc.stdout)
+        args = ["run", str(folder), "--seed", str(seed), "--fail-rate", str(fail_rate)]
+        figures, wall = plan_bridge([*args, "--quiet", "--journal", str(journal)])
         calls = [
             float(event["planning_time_s"])
             for line in journal.read_text(encoding="utf-8").splitlines()
@@ -174,16 +170,7 @@ def measure(
 def plan_once(folder: Path, source: Path) -> dict[str, Any]:
     """``plan-bridge plan`` of ``folder`` by the plan_bridge of ``source`` (a fresh
     process): its planning time, and the process's wall time."""
-    env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST", PYTHONPATH=str(source))
-    command = [sys.executable, "-m", "plan_bridge", "plan", str(folder), "--json"]
-    started = time.perf_counter()
-    proc = subprocess.run(
-        command, capture_output=True, text=True, timeout=3600, env=env, check=False
-    )
-    wall = time.perf_counter() - started
-    if proc.returncode not in (0, 1):
-        raise RuntimeError(f"{' '.join(command)} failed:\n{proc.stderr[-3000:]}")
-    figures = json.loads(proc.stdout)
+    figures, wall = plan_bridge(["plan", str(folder)], source)
     planning = float(figures["planning_time_s"])
     row = dict.fromkeys(("load_s", "task_s", "replans_s", "execution_s", "ours_outside_s"), 0.0)
     return {

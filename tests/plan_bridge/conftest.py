@@ -181,3 +181,14 @@ def map_house(
 def house() -> Any:
     """:func:`map_house`: call it with its options."""
     return map_house
+
+
+@pytest.fixture
+def kairos() -> Any:
+    """Kairos in a pool of two planner processes of the test's own (closed after)."""
+    from plan_bridge.planning.planner import UPPlanner
+    from plan_bridge.planning.worker import WorkerPool
+
+    pool = WorkerPool(max_workers=2)
+    yield UPPlanner("kairos", pool=pool)
+    pool.close()

@@ -16,7 +16,7 @@ import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
-from plan_bridge.maps.tasks import RouteTasks
+from plan_bridge.maps.tasks import RouteTasks, whereabouts
 from plan_bridge.pddl.task import Fact
 
 __all__ = ["Job", "allocate", "jobs_of"]
@@ -58,13 +58,7 @@ def jobs_of(
 ) -> list[Job]:
     """The jobs of ``goal`` (lower-case atoms) for ``robots`` in the belief ``facts``."""
     fleet = set(robots)
-    where: dict[str, str] = {}
-    holder: dict[str, str] = {}
-    for fact in facts:
-        if fact[0] == "at" and len(fact) == 3:
-            where[fact[1]] = fact[2]
-        elif fact[0] == "holding" and len(fact) == 3:
-            holder[fact[2]] = fact[1]
+    where, holder = whereabouts(facts)
     groups = _Union()
     for index, atom in enumerate(goal):
         key = f"#{index}"
@@ -138,10 +132,8 @@ def allocate(
 ) -> dict[str, list[Job]]:
     """Each robot's jobs (see the module's doc); every job goes to one robot. Routes
     go round the hallways ``closed``."""
-    place: dict[str, str | None] = {r: None for r in robots}
-    for fact in facts:
-        if fact[0] == "at" and len(fact) == 3 and fact[1] in place:
-            place[fact[1]] = fact[2]
+    where, _ = whereabouts(facts)
+    place: dict[str, str | None] = {r: where.get(r) for r in robots}
     busy = dict.fromkeys(robots, 0.0)
     speed = {r: max(view.model.robot(view.name(r)).speed, 1e-6) for r in robots}
     plan: dict[str, list[Job]] = {r: [] for r in robots}

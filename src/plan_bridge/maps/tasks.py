@@ -38,7 +38,14 @@ from plan_bridge.maps.model import WorldModel
 from plan_bridge.pddl.spec import ProblemSpec
 from plan_bridge.pddl.task import Fact, PlanningTask, task_from_spec
 
-__all__ = ["DOMAIN_PATH", "MAP_FUNCTIONS", "MAP_PREDICATES", "RouteTasks", "TaskError"]
+__all__ = [
+    "DOMAIN_PATH",
+    "MAP_FUNCTIONS",
+    "MAP_PREDICATES",
+    "RouteTasks",
+    "TaskError",
+    "whereabouts",
+]
 
 DOMAIN_PATH = Path(__file__).with_name("domain.pddl")
 """The map domain shipped with plan_bridge."""
@@ -186,10 +193,7 @@ class RouteTasks:
 
     def robot_place(self, facts: FactSnapshot, robot: str) -> str | None:
         """Where the belief has ``robot`` (a lower-case place name), or None."""
-        for fact in facts:
-            if len(fact) == 3 and fact[0] == "at" and fact[1] == robot:
-                return fact[2]
-        return None
+        return whereabouts(facts)[0].get(robot)
 
     def robots(self) -> list[str]:
         """The robots' lower-case names."""
@@ -207,13 +211,7 @@ class RouteTasks:
     ) -> _Needs:
         needs = _Needs()
         chosen = list(robots) if robots is not None else self.robots()
-        where: dict[str, str] = {}
-        held: dict[str, str] = {}
-        for fact in facts:
-            if fact[0] == "at" and len(fact) == 3:
-                where[fact[1]] = fact[2]
-            elif fact[0] == "holding" and len(fact) == 3:
-                held[fact[2]] = fact[1]
+        where, held = whereabouts(facts)
         for robot in chosen:
             place = where.get(robot)
             if place is None:
@@ -364,6 +362,19 @@ class RouteTasks:
                 for first, second in ((a, b), (b, a)):
                     init.add(("hall-ends", first, second, gate))
                     values[("metres", first, second)] = metres
+
+
+def whereabouts(facts: Iterable[Fact]) -> tuple[dict[str, str], dict[str, str]]:
+    """Where the belief ``facts`` has things (robot or object -> place) and who holds
+    what (object -> robot)."""
+    where: dict[str, str] = {}
+    held: dict[str, str] = {}
+    for fact in facts:
+        if fact[0] == "at" and len(fact) == 3:
+            where[fact[1]] = fact[2]
+        elif fact[0] == "holding" and len(fact) == 3:
+            held[fact[2]] = fact[1]
+    return where, held
 
 
 def _static(spec: ProblemSpec) -> tuple[object, ...]:

@@ -10,19 +10,10 @@ from plan_bridge.execution.semantics import ActionModel
 from plan_bridge.execution.world import FactSnapshot
 from plan_bridge.fleet.planner import FleetPlanner
 from plan_bridge.maps.tasks import RouteTasks
-from plan_bridge.planning.planner import UPPlanner
-from plan_bridge.planning.worker import WorkerPool
 
 pytestmark = pytest.mark.timeout(120)
 
 SWAP = [("at", "apple", "shelf_top"), ("at", "pear", "desk_top")]
-
-
-@pytest.fixture
-def kairos() -> Any:
-    pool = WorkerPool(max_workers=2)
-    yield UPPlanner("kairos", pool=pool)
-    pool.close()
 
 
 def start(task: Any) -> FactSnapshot:

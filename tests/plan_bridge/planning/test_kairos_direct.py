@@ -13,9 +13,7 @@ from plan_bridge.execution.world import FactSnapshot
 from plan_bridge.maps.tasks import RouteTasks
 from plan_bridge.pddl.task import load_task
 from plan_bridge.planning.kairos_direct import solve_with_kairos
-from plan_bridge.planning.planner import UPPlanner
 from plan_bridge.planning.problem_source import problem_source
-from plan_bridge.planning.worker import WorkerPool
 
 ROOT = Path(__file__).resolve().parents[3]
 COURIER = ROOT / "domains" / "timed_courier"
@@ -25,13 +23,6 @@ pytestmark = pytest.mark.timeout(120)
 
 def start(task: Any) -> FactSnapshot:
     return FactSnapshot(task.initial_facts, ActionModel(task).initial_values())
-
-
-@pytest.fixture
-def kairos() -> Any:
-    pool = WorkerPool(max_workers=1)
-    yield UPPlanner("kairos", pool=pool)
-    pool.close()
 
 
 def test_a_task_read_from_pddl_is_planned_and_replanned_from_another_state(kairos: Any) -> None:
