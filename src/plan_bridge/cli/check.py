@@ -1,14 +1,18 @@
 """The ``check`` subcommand of ``plan-bridge``: the front end's verdict, the skill
 bindings and the engines that would plan, for every problem of a target, without
 planning. Split from :mod:`~plan_bridge.cli.run`, whose input check it shares
-(:func:`~plan_bridge.cli.base.check_input`)."""
+(:func:`~plan_bridge.cli.base.check_input`). With ``--probe``, also whether the ROS 2
+servers of the folder's skill map are up (exit 1 when one is not: the map is fine,
+the robot is not ready)."""
 
 from __future__ import annotations
 
 import argparse
 import sys
+from typing import Any
 
 from plan_bridge.cli.base import (
+    EXIT_FAILED,
     EXIT_OK,
     Command,
     InputError,
@@ -21,6 +25,37 @@ from plan_bridge.cli.base import (
 
 def _configure_check(parser: argparse.ArgumentParser) -> None:
     add_input_arguments(parser)
+    add_probe_argument(parser)
+
+
+def add_probe_argument(parser: argparse.ArgumentParser) -> None:
+    """``--probe [SECONDS]``: look for the ROS 2 servers of the skill map."""
+    parser.add_argument(
+        "--probe",
+        nargs="?",
+        type=float,
+        const=3.0,
+        default=None,
+        metavar="SECONDS",
+        help="also check that the ROS 2 server of every ros_action, ros_service and ros_topic "
+        "entry of skills.toml is up with the type the map names, waiting up to SECONDS "
+        "(default 3) for them; exit 1 when one is not",
+    )
+
+
+def probe(skill_map: Any, task: Any, seconds: float) -> list[str]:
+    """Print what ``--probe`` found; the lines of the servers that are not usable."""
+    from plan_bridge.skills.ros_probe import probe_skill_map
+
+    if skill_map is None or not any(entry.ros is not None for entry in skill_map.entries):
+        print("probe: no ROS entries in the skill map", file=sys.stderr)
+        return []
+    bad = []
+    for result in probe_skill_map(skill_map, task, timeout=seconds):
+        print(f"probe: {result}", file=sys.stderr)
+        if result.problem:
+            bad.append(str(result))
+    return bad
 
 
 def _check(args: argparse.Namespace) -> int:
@@ -33,6 +68,7 @@ def _check(args: argparse.Namespace) -> int:
         return fail(str(exc))
     single = len(chosen.problems) == 1
     problems_found: list[str] = []
+    unready: list[str] = []
     name = ""
     for problem in chosen.problems:
         try:
@@ -48,8 +84,13 @@ def _check(args: argparse.Namespace) -> int:
             continue
         name = loaded.name
         warnings.show()
-        for line in setup.skills.check(loaded.task):
+        noted: list[str] = []
+        for line in setup.skills.check(loaded.task, noted):
             problems_found.append(f"{problem.name}: {line}")
+        for line in noted:
+            print(f"warning: {problem.name}: {line}", file=sys.stderr)
+        if args.probe is not None and problem == chosen.problems[-1]:
+            unready = probe(setup.extra.get("skill_map"), loaded.task, args.probe)
         print(
             f"{problem.name}: {len(loaded.task.actions)} actions, {len(loaded.task.objects)} objects, "
             f"{len(loaded.task.goal_facts)} goal atoms"
@@ -69,6 +110,11 @@ def _check(args: argparse.Namespace) -> int:
     if problems_found:
         return fail(f"{len(problems_found)} problem(s):\n  " + "\n  ".join(problems_found))
     print(f"{name}: OK ({len(chosen.problems)} problem(s) checked)")
+    if unready:
+        return fail(
+            f"{len(unready)} ROS server(s) of the skill map not ready:\n  " + "\n  ".join(unready),
+            EXIT_FAILED,
+        )
     return EXIT_OK
 
 

@@ -83,6 +83,8 @@ class Skill:
         outcomes = state.get_registered_outcomes()
         problems = []
         for required in REQUIRED_OUTCOMES:
+            if required == "preempted":
+                continue  # optional: see outcome_warnings
             if required not in outcomes and required not in self.outcome_map.values():
                 problems.append(f"it has no outcome {required!r} (outcomes: {', '.join(outcomes)})")
         for outcome in outcomes:
@@ -100,6 +102,18 @@ class Skill:
                     f"outcome_map sends {source!r} to {target!r}, not to one of {REQUIRED_OUTCOMES}"
                 )
         return problems
+
+    def outcome_warnings(self, state: smach.State) -> list[str]:
+        """What is allowed but worth knowing about ``state``'s outcomes: a skill without
+        ``preempted`` (as many SMACH tutorial states are) is not stopped by a preempt;
+        the executive lets its step finish, then stops the plan."""
+        outcomes = state.get_registered_outcomes()
+        if "preempted" in outcomes or "preempted" in self.outcome_map.values():
+            return []
+        return [
+            f"it has no outcome 'preempted' (outcomes: {', '.join(outcomes)}): a preempt "
+            f"does not stop it; the executive lets such a step finish before it stops the plan"
+        ]
 
 
 class SkillRegistry:
@@ -238,12 +252,15 @@ class SkillRegistry:
             )
         return state, skill
 
-    def check(self, task: PlanningTask) -> list[str]:
+    def check(self, task: PlanningTask, warnings: list[str] | None = None) -> list[str]:
         """Every problem binding this registry to ``task``'s actions, one line each.
 
         Each skill is built once with example arguments (objects of the right types)
-        to check its outcomes, so factories should only construct states.
+        to check its outcomes, so factories should only construct states. What is
+        allowed but worth a warning (a skill without a ``preempted`` outcome) is
+        appended to ``warnings``, when given.
         """
+        noted: list[str] = [] if warnings is None else warnings
         from plan_bridge.planning.types import PlanStep
 
         problems: list[str] = []
@@ -276,6 +293,7 @@ class SkillRegistry:
                 problems.append(f"skill {name!r}: {exc}")
                 continue
             problems.extend(f"skill {name!r}: {p}" for p in skill.outcome_problems(state))
+            noted.extend(f"skill {name!r}: {w}" for w in skill.outcome_warnings(state))
             for variant in self.variants(name):
                 label = f"skill {name!r} variant {variant!r}"
                 try:
@@ -285,6 +303,7 @@ class SkillRegistry:
                     continue
                 assert other is not None
                 problems.extend(f"{label}: {p}" for p in other.outcome_problems(state))
+                noted.extend(f"{label}: {w}" for w in other.outcome_warnings(state))
         for name in sorted(set(self._variants) - set(task.actions)):
             problems.append(
                 f"skill variants of {name!r}: the domain has no action {name!r}; actions: "

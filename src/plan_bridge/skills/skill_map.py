@@ -52,6 +52,7 @@ from plan_bridge.skills.skill_map_source import factory_name, parameter_identifi
 if TYPE_CHECKING:
     import smach
     from plan_bridge.pddl.task import ActionSchema
+    from plan_bridge.skills.ros_entries import RosEntry
 
 __all__ = [
     "ENTRY_KEYS",
@@ -227,6 +228,9 @@ class SkillMapEntry:
     """``arguments`` as written; None: all of the action's, in PDDL order."""
     outcome_map: Mapping[str, str] = field(default_factory=dict)
     variant: str = ""
+    ros: RosEntry | None = None
+    """For an entry with ``ros_action``, ``ros_service`` or ``ros_topic``: what it calls
+    (:mod:`~plan_bridge.skills.ros_entries`); ``target`` is then ``"ros_action NAME"``."""
 
     @property
     def location(self) -> str:

@@ -23,6 +23,8 @@ from typing import TYPE_CHECKING, Any
 
 from plan_bridge.pddl.constructs import did_you_mean
 from plan_bridge.skills.registry import REQUIRED_OUTCOMES, SkillFactory
+from plan_bridge.skills.ros_entries import ROS_KEYS, check_ros_entry, is_ros_entry
+from plan_bridge.skills.ros_skill_states import RosSkill
 from plan_bridge.skills.skill_map import (
     ENTRY_KEYS,
     ConstantPick,
@@ -69,6 +71,8 @@ class _Reader:
         self.actions = {name.lower(): schema for name, schema in task.actions.items()}
         self.package = package
         self.problems: list[MapProblem] = []
+        #: The problem's objects of a type (None: not known, e.g. `skills` on the front end).
+        self.objects_of_type = getattr(task, "objects_of_type", None)
 
     def problem(self, line: int | None, message: str) -> None:
         self.problems.append(MapProblem(str(self.path), line, message))
@@ -118,6 +122,8 @@ class _Reader:
     def entry(
         self, schema: ActionSchema, element: dict[str, Any], where: EntryLines
     ) -> SkillMapEntry | None:
+        if is_ros_entry(element):
+            return self.ros_entry(schema, element, where)
         action = schema.name
         line = where.line
         at = where.key
@@ -127,6 +133,8 @@ class _Reader:
         for key in element:
             if key not in ENTRY_KEYS:
                 misspelled.update(difflib.get_close_matches(key, ENTRY_KEYS, n=1, cutoff=0.6))
+                if difflib.get_close_matches(key, ROS_KEYS, n=1, cutoff=0.6):
+                    misspelled.add("factory")  # a misspelled ros_* key: no factory expected
                 hint = ""
                 if key.lower() in self.actions:
                     hint = (
@@ -136,17 +144,11 @@ class _Reader:
                     )
                 self.problem(
                     at(key),
-                    f"[{action}]: unknown key {key!r}{did_you_mean(key, ENTRY_KEYS)}; "
-                    f"allowed keys: {', '.join(ENTRY_KEYS)}{hint}",
+                    f"[{action}]: unknown key {key!r}{did_you_mean(key, (*ENTRY_KEYS, *ROS_KEYS))}; "
+                    f"allowed keys: {', '.join(ENTRY_KEYS)} (a ROS entry: "
+                    f"{', '.join(ROS_KEYS)} with type){hint}",
                 )
-        variant = element.get("variant", "")
-        if not isinstance(variant, str) or ("variant" in element and not variant.strip()):
-            self.problem(
-                at("variant"),
-                f"[{action}]: variant must be a non-empty string naming another way to "
-                f'perform the action (e.g. variant = "careful"), got {shown_value(variant)}',
-            )
-            variant = ""
+        variant = self.variant(action, element, at("variant"))
         label = f"[{action}]" + (f" variant {variant!r}" if variant else "")
         outcome_map = self.outcome_map(label, element.get("outcome_map", {}), at("outcome_map"))
         picks = self.arguments(label, schema, element.get("arguments"), at("arguments"))
@@ -158,7 +160,8 @@ class _Reader:
             self.problem(
                 line,
                 f'{label}: no factory; add factory = "module:callable" (a function or class '
-                f"that takes the action's arguments and returns a smach.State)",
+                f"that takes the action's arguments and returns a smach.State), or bind the "
+                f'action to ROS 2 with ros_action, ros_service or ros_topic and type = "..."',
             )
         elif not isinstance(target, str):
             self.problem(
@@ -200,6 +203,50 @@ class _Reader:
             arguments=None if arguments is None else tuple(arguments),
             outcome_map=outcome_map,
             variant=variant,
+        )
+
+    def variant(self, action: str, element: dict[str, Any], line: int | None) -> str:
+        variant = element.get("variant", "")
+        if not isinstance(variant, str) or ("variant" in element and not variant.strip()):
+            self.problem(
+                line,
+                f"[{action}]: variant must be a non-empty string naming another way to "
+                f'perform the action (e.g. variant = "careful"), got {shown_value(variant)}',
+            )
+            return ""
+        return variant
+
+    def ros_entry(
+        self, schema: ActionSchema, element: dict[str, Any], where: EntryLines
+    ) -> SkillMapEntry | None:
+        """An entry with ros_action, ros_service or ros_topic (see
+        :mod:`~plan_bridge.skills.ros_entries`)."""
+        before = len(self.problems)
+        variant = self.variant(schema.name, element, where.key("variant"))
+        label = f"[{schema.name}]" + (f" variant {variant!r}" if variant else "")
+        outcome_map = self.outcome_map(
+            label, element.get("outcome_map", {}), where.key("outcome_map")
+        )
+        entry = check_ros_entry(
+            schema,
+            element,
+            where,
+            label,
+            folder=self.path.parent,
+            objects_of_type=self.objects_of_type,
+            report=self.problem,
+        )
+        if entry is None or len(self.problems) > before:
+            return None
+        return SkillMapEntry(
+            action=schema.name,
+            target=f"{entry.key} {entry.name}",
+            factory=RosSkill(entry),
+            path=self.path,
+            line=where.line,
+            outcome_map=outcome_map,
+            variant=variant,
+            ros=entry,
         )
 
     def outcome_map(self, label: str, value: object, line: int | None) -> dict[str, str]:

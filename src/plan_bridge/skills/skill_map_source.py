@@ -180,6 +180,8 @@ class TomlLines:
                             self._key(path[0], path[1], number)
                     elif path and len(table) == 1:
                         self._key(table[0], path[0], number)
+                    elif path and len(table) == 2:  # [action.goal]: "goal.FIELD"
+                        self._key(table[0], f"{table[1]}.{'.'.join(path)}", number)
             for quote in ('"""', "'''"):
                 if raw.count(quote) % 2 == 1:
                     in_string = quote
@@ -207,8 +209,12 @@ class EntryLines:
     keys: Mapping[str, int]
 
     def key(self, key: str) -> int | None:
-        """The line of ``key`` in the entry (the entry's line if it is not on one)."""
-        return self.keys.get(key, self.line)
+        """The line of ``key`` in the entry (the entry's line if it is not on one); a
+        key of a sub-table (``goal.pose``) falls back to the sub-table's line."""
+        if key in self.keys:
+            return self.keys[key]
+        head = key.split(".", 1)[0]
+        return self.keys.get(head, self.line)
 
 
 def _key_path(key: str) -> list[str]:
