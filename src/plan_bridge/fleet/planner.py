@@ -234,7 +234,7 @@ class FleetPlanner:
         task = self.view.task_for(plan.facts, atoms, robots=[robot], closed=plan.closed)
         model = self._model(task)
         state = project(plan.facts, task)
-        for first in range(len(last.steps)):
+        for first in reversed(range(len(last.steps))):  # the shortest rest first
             rest = _from_zero(last.steps[first:])
             if all(a in task.objects for step in rest for a in step.arguments) and (
                 model.check_plan(rest, state).valid

@@ -60,7 +60,9 @@ class _Source(Protocol):
     problem_text: str | None
     spec: ProblemSpec | None
     kairos: KairosBase | None
-    true_atoms: dict[tuple[str, ...], Any]
+
+    @property
+    def true_atoms(self) -> dict[tuple[str, ...], Any]: ...
 
 
 def solve_with_kairos(base: _Source, request: dict[str, Any]) -> dict[str, Any] | None:

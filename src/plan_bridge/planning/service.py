@@ -72,29 +72,56 @@ def serve(requests: IO[str], replies: IO[str]) -> None:
 
 
 class _Base:
-    """A parsed base problem and what deriving problems from it needs."""
+    """A base problem and what deriving problems from it needs.
+
+    A problem read from text is parsed at once (the expensive part a prime does ahead).
+    A problem built in memory (a spec) is made into unified-planning's problem only
+    when an engine needs it: Kairos reads the text the spec writes, and needs none.
+    """
 
     def __init__(
         self, problem: Any, domain: str, problem_text: str | None, spec: ProblemSpec | None
     ) -> None:
-        from plan_bridge.pddl.up_runtime import lean_copy
-
         #: The texts it came from (a built problem: its spec), for Kairos' own reader.
         self.domain_text = domain
         self.problem_text = problem_text
         self.spec = spec
         self.kairos: KairosBase | None = None
-        self.problem = lean_copy(problem)
-        self.kind = self.problem.kind
-        # Fact -> fluent expression of the atoms true in the base's initial state.
-        self.true_atoms: dict[tuple[str, ...], Any] = {
-            _atom_of(fluent_exp): fluent_exp
-            for fluent_exp, value in self.problem.explicit_initial_values.items()
-            if fluent_exp.type.is_bool_type() and value.is_bool_constant() and value.is_true()
-        }
-        self.goal_atoms = _conjunctive_goal(self.problem.goals)
+        self._source = problem
+        self._problem: Any = None
+        self._true_atoms: dict[tuple[str, ...], Any] | None = None
         #: The warm search's compiled actions and groundings of this problem.
         self.warm = WarmState()
+        if problem is not None:
+            self._up()
+
+    def _up(self) -> Any:
+        """The unified-planning problem (made on first use) and what derives from it."""
+        if self._problem is None:
+            from plan_bridge.pddl.up_runtime import lean_copy
+
+            assert self._source is not None or self.spec is not None
+            source = self._source if self._source is not None else self.spec.build()  # type: ignore[union-attr]
+            self._problem = lean_copy(source)
+            self.kind = self._problem.kind
+            # Fact -> fluent expression of the atoms true in the base's initial state.
+            self._true_atoms = {
+                _atom_of(fluent_exp): fluent_exp
+                for fluent_exp, value in self._problem.explicit_initial_values.items()
+                if fluent_exp.type.is_bool_type() and value.is_bool_constant() and value.is_true()
+            }
+            self.goal_atoms = _conjunctive_goal(self._problem.goals)
+        return self._problem
+
+    @property
+    def problem(self) -> Any:
+        return self._up()
+
+    @property
+    def true_atoms(self) -> dict[tuple[str, ...], Any]:
+        self._up()
+        assert self._true_atoms is not None
+        return self._true_atoms
 
     def derive(
         self,
@@ -184,7 +211,7 @@ def _parse_base(reader: Any, request: dict[str, Any]) -> float:
         warnings.simplefilter("ignore")  # the client reported them when it loaded the task
         if request.get("spec") is not None:
             spec = ProblemSpec.from_json(request["domain"], json.loads(request["spec"]))
-            base = _Base(spec.build(), request["domain"], None, spec)
+            base = _Base(None, request["domain"], None, spec)
         else:
             problem = reader.parse_problem_string(request["domain"], request["problem"])
             base = _Base(problem, request["domain"], request["problem"], None)
