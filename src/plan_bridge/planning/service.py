@@ -25,7 +25,7 @@ import os
 import sys
 import time
 from collections import OrderedDict
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from typing import IO, Any
 
 from plan_bridge.pddl.spec import ProblemSpec
@@ -80,7 +80,12 @@ class _Base:
     """
 
     def __init__(
-        self, problem: Any, domain: str, problem_text: str | None, spec: ProblemSpec | None
+        self,
+        problem: Any,
+        domain: str,
+        problem_text: str | None,
+        spec: ProblemSpec | None,
+        read: Callable[[], Any] | None = None,
     ) -> None:
         #: The texts it came from (a built problem: its spec), for Kairos' own reader.
         self.domain_text = domain
@@ -88,6 +93,7 @@ class _Base:
         self.spec = spec
         self.kairos: KairosBase | None = None
         self._source = problem
+        self._read = read
         self._problem: Any = None
         self._true_atoms: dict[tuple[str, ...], Any] | None = None
         #: The warm search's compiled actions and groundings of this problem.
@@ -98,10 +104,17 @@ class _Base:
     def _up(self) -> Any:
         """The unified-planning problem (made on first use) and what derives from it."""
         if self._problem is None:
+            import warnings
+
             from plan_bridge.pddl.up_runtime import lean_copy
 
-            assert self._source is not None or self.spec is not None
-            source = self._source if self._source is not None else self.spec.build()  # type: ignore[union-attr]
+            source = self._source
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # the client reported them when it loaded it
+                if source is None and self._read is not None:
+                    source = self._read()
+                elif source is None and self.spec is not None:
+                    source = self.spec.build()
             self._problem = lean_copy(source)
             self.kind = self._problem.kind
             # Fact -> fluent expression of the atoms true in the base's initial state.
@@ -201,20 +214,22 @@ def _conjunctive_goal(goals: Iterable[Any]) -> list[tuple[str, ...]] | None:
 _bases: OrderedDict[str, _Base] = OrderedDict()
 
 
-def _parse_base(reader: Any, request: dict[str, Any]) -> float:
-    """Parse the request's text (or build its spec) into the cache under its key: the
-    time it took."""
-    import warnings
-
+def _parse_base(reader: Any, request: dict[str, Any], *, eager: bool = True) -> float:
+    """Keep the request's base problem in the cache under its key: its text parsed now
+    (``eager``: a prime, an engine that needs it) or when first needed, its spec built
+    when first needed. The time it took."""
     started = time.monotonic()
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the client reported them when it loaded the task
-        if request.get("spec") is not None:
-            spec = ProblemSpec.from_json(request["domain"], json.loads(request["spec"]))
-            base = _Base(None, request["domain"], None, spec)
-        else:
-            problem = reader.parse_problem_string(request["domain"], request["problem"])
-            base = _Base(problem, request["domain"], request["problem"], None)
+    domain = request["domain"]
+    if request.get("spec") is not None:
+        spec = ProblemSpec.from_json(domain, json.loads(request["spec"]))
+        base = _Base(None, domain, None, spec)
+    else:
+        text = request["problem"]
+        base = _Base(
+            None, domain, text, None, read=lambda: reader.parse_problem_string(domain, text)
+        )
+        if eager:
+            base._up()  # parsed now
     _bases[request["base"]] = base
     while len(_bases) > BASE_CACHE_SIZE:
         _bases.popitem(last=False)
@@ -245,7 +260,8 @@ def _solve_request(reader: Any, request: dict[str, Any]) -> dict[str, Any]:
             request.get("problem") is None and request.get("spec") is None
         ):
             return {"outcome": "missing-base"}
-        parse_time = _parse_base(reader, request)
+        # Kairos reads the text itself: no parse of unified-planning's for it.
+        parse_time = _parse_base(reader, request, eager=request["engine"] != KAIROS)
     base = _bases[key]
     _bases.move_to_end(key)
     if request["engine"] == WARM:
