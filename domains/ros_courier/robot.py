@@ -87,8 +87,10 @@ class CourierRobot:
             if not failed:
                 near = {name: number for number, name in self.places.items()}
                 self.where = near.get(self._place_at(pose.x, pose.y), 0)
-        _say(f"set_pose ({pose.x:g}, {pose.y:g}) in {request.initial_pose.header.frame_id}: "
-             + ("fault: not localised" if failed else f"at {self.places.get(self.where, '?')}"))
+        _say(
+            f"set_pose ({pose.x:g}, {pose.y:g}) in {request.initial_pose.header.frame_id}: "
+            + ("fault: not localised" if failed else f"at {self.places.get(self.where, '?')}")
+        )
         response.success = not failed
         return response
 
@@ -115,15 +117,14 @@ class CourierRobot:
             _say(f"aborted: no waypoint {target}")
             return result
         for tenth in range(1, 11):
-            if handle.is_cancel_requested:
-                handle.canceled()
-                _say(f"canceled drive to {name}")
-                return result
             if kind == "blocked" and tenth == 5:
                 handle.abort()
                 _say(f"fault: blocked on the way to {name}")
                 return result
-            time.sleep(self.drive_time / 10)
+            if not self._drive_on(handle, time.monotonic() + self.drive_time / 10):
+                handle.canceled()
+                _say(f"canceled drive to {name}")
+                return result
             handle.publish_feedback(self.fibonacci.Feedback(sequence=[tenth * 10]))
         if kind == "off-route":
             _say(f"fault: off route, never reached {name}")
@@ -135,6 +136,15 @@ class CourierRobot:
             _say(f"succeeded drive to {name}")
         handle.succeed()
         return result
+
+    @staticmethod
+    def _drive_on(handle: Any, until: float) -> bool:
+        """Drive until ``until``; False as soon as the goal is to be cancelled."""
+        while time.monotonic() < until:
+            if handle.is_cancel_requested:
+                return False
+            time.sleep(0.01)
+        return not handle.is_cancel_requested
 
     def gripper(self, request: Any, response: Any) -> Any:
         with self.lock:
@@ -162,10 +172,14 @@ class CourierRobot:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--fail-rate", type=float, default=0.0, help="fault probability per goal or call")
+    parser.add_argument(
+        "--fail-rate", type=float, default=0.0, help="fault probability per goal or call"
+    )
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--drive-time", type=float, default=0.3, help="seconds per drive")
-    parser.add_argument("--lease", type=float, default=2.0, help="DDS lease in seconds (0: default)")
+    parser.add_argument(
+        "--lease", type=float, default=2.0, help="DDS lease in seconds (0: default)"
+    )
     args = parser.parse_args(argv)
     if not 0.0 <= args.fail_rate <= 1.0:
         parser.error(f"--fail-rate must be between 0 and 1, got {args.fail_rate}")

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-from typing import Any
 
 from plan_bridge.cli.base import (
     EXIT_FAILED,
@@ -41,21 +40,6 @@ def add_probe_argument(parser: argparse.ArgumentParser) -> None:
         "entry of skills.toml is up with the type the map names, waiting up to SECONDS "
         "(default 3) for them; exit 1 when one is not",
     )
-
-
-def probe(skill_map: Any, task: Any, seconds: float) -> list[str]:
-    """Print what ``--probe`` found; the lines of the servers that are not usable."""
-    from plan_bridge.skills.ros_probe import probe_skill_map
-
-    if skill_map is None or not any(entry.ros is not None for entry in skill_map.entries):
-        print("probe: no ROS entries in the skill map", file=sys.stderr)
-        return []
-    bad = []
-    for result in probe_skill_map(skill_map, task, timeout=seconds):
-        print(f"probe: {result}", file=sys.stderr)
-        if result.problem:
-            bad.append(str(result))
-    return bad
 
 
 def _check(args: argparse.Namespace) -> int:
@@ -90,7 +74,9 @@ def _check(args: argparse.Namespace) -> int:
         for line in noted:
             print(f"warning: {problem.name}: {line}", file=sys.stderr)
         if args.probe is not None and problem == chosen.problems[-1]:
-            unready = probe(setup.extra.get("skill_map"), loaded.task, args.probe)
+            from plan_bridge.skills.ros_probe import print_probe
+
+            unready = print_probe(setup.extra.get("skill_map"), loaded.task, args.probe)
         print(
             f"{problem.name}: {len(loaded.task.actions)} actions, {len(loaded.task.objects)} objects, "
             f"{len(loaded.task.goal_facts)} goal atoms"

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from plan_bridge.cli.base import (
+    EXIT_FAILED,
     EXIT_OK,
     Command,
     InputError,
@@ -27,7 +28,7 @@ from plan_bridge.cli.base import (
 )
 
 if TYPE_CHECKING:
-    from collections.abc import Mapping
+    from collections.abc import Callable, Mapping
 
     from plan_bridge.pddl.task import ActionSchema
     from plan_bridge.skills.registry import SkillRegistry
@@ -51,6 +52,8 @@ class Binding:
     arguments: list[Any] | None = None
     outcome_map: dict[str, str] = field(default_factory=dict)
     variant: str = ""
+    ros: dict[str, Any] | None = None
+    """A ROS entry's ``kind``, ``name`` and ``type`` (None: a factory)."""
 
     def to_json(self) -> dict[str, Any]:
         data: dict[str, Any] = {
@@ -59,6 +62,7 @@ class Binding:
             "line": self.line,
             "arguments": self.arguments,
             "outcome_map": self.outcome_map,
+            "ros": self.ros,
         }
         if self.variant:
             data = {"variant": self.variant, **data}
@@ -70,6 +74,8 @@ class Binding:
         if self.runs == NONE:
             return "no skill (and no fallback): `plan-bridge check` fails"
         text = f"{'your skill' if self.runs == SKILL_MAP else 'domain skill'} {self.factory}"
+        if self.ros is not None:
+            text = f"ROS {self.ros['kind']} {self.ros['name']} ({self.ros['type']})"
         if self.arguments is not None:
             text += f"({', '.join(str(a) for a in self.arguments)})"
         if self.outcome_map:
@@ -123,6 +129,7 @@ def bindings(
     def binding(action: str, variant: str = "") -> Binding:
         entry = skill_map.entry(action, variant) if skill_map is not None else None
         if entry is not None:
+            ros = entry.ros
             return Binding(
                 SKILL_MAP,
                 entry.target,
@@ -130,6 +137,9 @@ def bindings(
                 None if entry.arguments is None else list(entry.arguments),
                 dict(entry.outcome_map),
                 variant,
+                None
+                if ros is None
+                else {"kind": ros.kind, "name": ros.name, "type": ros.type_name},
             )
         skill = registered_skill(registry, action, variant)
         if skill is not None:
@@ -152,11 +162,31 @@ def bindings(
 def _configure(parser: argparse.ArgumentParser) -> None:
     add_input_arguments(parser)
     parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument(
+        "--probe",
+        nargs="?",
+        type=float,
+        const=3.0,
+        default=None,
+        metavar="SECONDS",
+        help="also check that the ROS 2 servers of the skill map are up (waiting up to "
+        "SECONDS, default 3); exit 1 when one is not",
+    )
 
 
 @dataclass(frozen=True)
 class _FrontEndActions:
+    """The domain's actions and the problem's objects, from the PDDL front end."""
+
     actions: Mapping[str, ActionSchema]
+    objects: Mapping[str, str]
+    """Object (and constant) name -> its type."""
+    is_subtype: Callable[[str, str], bool]
+
+    def objects_of_type(self, type_name: str) -> tuple[str, ...]:
+        return tuple(
+            name for name, kind in self.objects.items() if self.is_subtype(kind, type_name)
+        )
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -169,8 +199,13 @@ def _run(args: argparse.Namespace) -> int:
         listed = _list(args, chosen.folder, domain, problem, world=chosen.world is not None)
     except (InputError, PlanBridgeError) as exc:
         return fail(str(exc))
-    name, skill_map, rows = listed
+    name, skill_map, rows, task = listed
     map_path = None if skill_map is None else skill_map.path
+    unready: list[str] = []
+    if args.probe is not None:
+        from plan_bridge.skills.ros_probe import print_probe
+
+        unready = print_probe(skill_map, task, args.probe)
     if args.json:
         payload = {
             "target": name,
@@ -180,7 +215,7 @@ def _run(args: argparse.Namespace) -> int:
             "actions": [row.to_json() for row in rows],
         }
         print(json.dumps(payload, indent=None))
-        return EXIT_OK
+        return EXIT_FAILED if unready else EXIT_OK
     map_name = map_path.name if map_path is not None else ""
     out = sys.stdout
     print(
@@ -204,6 +239,8 @@ def _run(args: argparse.Namespace) -> int:
         + (f", {counts[NONE]} without a skill" if counts[NONE] else ""),
         file=out,
     )
+    if unready:
+        return fail(f"{len(unready)} ROS server(s) of the skill map not ready", EXIT_FAILED)
     return EXIT_OK
 
 
@@ -214,8 +251,9 @@ def _list(
     problem: Path,
     *,
     world: bool = False,
-) -> tuple[str, SkillMap | None, list[ActionBinding]]:
-    """(target name, its skill map, the bindings) of the input."""
+) -> tuple[str, SkillMap | None, list[ActionBinding], Any]:
+    """(target name, its skill map, the bindings, the task they were checked against)
+    of the input."""
     from plan_bridge.skills.registry import SkillRegistry
     from plan_bridge.skills.skill_map import find_skill_map, load_skill_map
 
@@ -227,7 +265,13 @@ def _list(
         from plan_bridge.pddl.front_end import analyse_files
         from plan_bridge.pddl.task import ActionSchema, Parameter
 
-        model = analyse_files(domain, problem).domain_model
+        front = analyse_files(domain, problem)
+        model = front.domain_model
+        objects = {
+            name: entry.type
+            for declared in (model.constants, front.problem_model.objects)
+            for name, entry in declared.items()
+        }
         actions = {
             action.name: ActionSchema(
                 action.name, tuple(Parameter(p.name.lstrip("?"), p.type) for p in action.params)
@@ -237,11 +281,12 @@ def _list(
         registry = SkillRegistry()
         map_path = find_skill_map(folder) if folder is not None else None
         skill_map = None
+        task = _FrontEndActions(actions, objects, model.is_subtype)
         if map_path is not None:
-            skill_map = load_skill_map(map_path, _FrontEndActions(actions))
+            skill_map = load_skill_map(map_path, task)
             skill_map.apply(registry)
         name = folder.name if folder is not None else domain.stem
-        return name, skill_map, bindings(actions, registry, skill_map, fallback=True)
+        return name, skill_map, bindings(actions, registry, skill_map, fallback=True), task
 
     from plan_bridge.missions.mission import load_target
 
@@ -252,7 +297,7 @@ def _list(
     rows = bindings(
         target.task.actions, setup.skills, found, package=package, folder_name=target.name
     )
-    return target.name, found, rows
+    return target.name, found, rows, target.task
 
 
 COMMANDS = (
@@ -262,7 +307,9 @@ COMMANDS = (
         description="For every PDDL action of TARGET (a domain folder, or DOMAIN PROBLEM): "
         "its parameters and what performs it: your skill from the folder's skills.toml "
         "(factory and skills.toml:LINE), the domain's registered skill, or the simulation "
-        "(fallback); variants too. A bad skill map: exit 2 with the file:line of each problem.",
+        "(fallback); variants too; a ROS entry of skills.toml as the action, service or topic it "
+        "calls. A bad skill map: exit 2 with the file:line of each problem; with --probe, exit 1 "
+        "when a ROS server of the map is not up.",
         configure=_configure,
         run=_run,
     ),

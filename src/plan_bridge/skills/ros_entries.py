@@ -217,18 +217,18 @@ class _EntryReader:
         self.unknown_keys(key)
         name = self.interface_name(key)
         interface = self.interface(key)
-        outcome_map = self.element.get("outcome_map", {})
+        # The keys that need no type are checked whatever the type: every mistake at once.
+        timeout = self.seconds("timeout", TOPIC_TIMEOUT if key == "ros_topic" else None)
+        server_wait = self.seconds("server_wait", SERVER_WAIT)
+        status = self.status(key)
         if interface is None or name is None:
             return None
         entry = RosEntry(key, name, str(self.element["type"]), interface, self.parameters)
-        conditions = self.conditions(entry)
-        status = self.status(key)
         fills = self.fills(entry)
-        timeout = self.seconds("timeout", TOPIC_TIMEOUT if key == "ros_topic" else None)
-        server_wait = self.seconds("server_wait", SERVER_WAIT)
+        conditions = self.conditions(entry)
         feedback = self.feedback(entry)
         named = [name for name, _ in conditions] + list(status.values())
-        outcomes = self.outcomes(named, outcome_map)
+        outcomes = self.outcomes(named, self.element.get("outcome_map", {}))
         if self.failed:
             return None
         return RosEntry(

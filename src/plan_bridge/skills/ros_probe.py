@@ -14,10 +14,11 @@ from __future__ import annotations
 import importlib
 import itertools
 import os
+import sys
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TextIO
 
 from plan_bridge.skills.ros_conditions import substitute, template_parameters
 
@@ -25,7 +26,7 @@ if TYPE_CHECKING:
     from plan_bridge.skills.ros_entries import RosEntry
     from plan_bridge.skills.skill_map import SkillMap, SkillMapEntry
 
-__all__ = ["ProbeResult", "probe_skill_map"]
+__all__ = ["ProbeResult", "print_probe", "probe_skill_map"]
 
 #: Seconds between two looks at the ROS graph.
 POLL = 0.1
@@ -149,3 +150,20 @@ def _seen(node: Any, map_entry: SkillMapEntry, name: str, client: Any) -> ProbeR
             map_entry, name, True, f"up, but it uses type {', '.join(types)}, not {ros.type_name}"
         )
     return ProbeResult(map_entry, name, True)
+
+
+def print_probe(
+    skill_map: SkillMap | None, task: Any, seconds: float, stream: TextIO | None = None
+) -> list[str]:
+    """Probe (:func:`probe_skill_map`) and print one ``probe: ...`` line per server to
+    ``stream`` (stderr); the lines of those that are not usable."""
+    out = stream or sys.stderr
+    if skill_map is None or not any(entry.ros is not None for entry in skill_map.entries):
+        print("probe: no ROS entries in the skill map", file=out)
+        return []
+    unusable = []
+    for result in probe_skill_map(skill_map, task, timeout=seconds):
+        print(f"probe: {result}", file=out)
+        if result.problem:
+            unusable.append(str(result))
+    return unusable

@@ -23,8 +23,9 @@ on first use and kept for later steps with the same name (no new client per step
 A server that disappeared during a goal or a call (the liveness check of
 smach.ros: two failed checks, 0.5 s apart; a crashed process leaves the graph when
 its DDS lease ends), or that did not come within ``server_wait``, is remembered as
-gone: later steps that need it wait :data:`GONE_WAIT` seconds for it to come back,
-not ``server_wait``, so the executive's retries and replans end quickly.
+gone: later steps that need it do not wait ``server_wait`` for it: a step aborts at once unless the server is back in the graph,
+so the executive's retries and replans end quickly (as the steps of a lost robot
+node do in :mod:`plan_bridge.ros.connection`).
 """
 
 from __future__ import annotations
@@ -44,8 +45,9 @@ if TYPE_CHECKING:
 
 __all__ = ["GONE_WAIT", "RosCall", "RosSkill", "forget_servers"]
 
-#: Seconds a step waits for a server remembered as gone before it aborts.
-GONE_WAIT = 0.5
+#: Seconds a step waits for a server remembered as gone before it aborts (0: it
+#: looks once: the executive's retries and replans look again).
+GONE_WAIT = 0.0
 #: Least seconds between two feedback records (the last one is always recorded).
 FEEDBACK_PERIOD = 0.2
 #: Seconds the server has to confirm a cancel after a preempt.
@@ -160,6 +162,7 @@ class RosCall(smach.State):
                 f"{self.entry.kind} {self.ros_name} is gone ({gone}); not waiting for it"
             )
         inner.recall_preempt()
+        inner._path = self.path  # its log lines name this step's state (it is in no tree)
         with self._lock:
             self._inner = inner
         if self.preempt_requested():
@@ -175,14 +178,16 @@ class RosCall(smach.State):
         return self._topic(ud, inner, local)
 
     def _back(self, inner: Any) -> bool:
-        """Whether a server remembered as gone is there again (waits :data:`GONE_WAIT`)."""
+        """Whether a server remembered as gone is in the ROS graph again (one look, and
+        more for :data:`GONE_WAIT` seconds if that is set)."""
         deadline = time.monotonic() + GONE_WAIT
-        while time.monotonic() < deadline and not self.preempt_requested():
+        while True:
             if _ready(inner):
                 _gone.pop(self.ros_name, None)
                 return True
+            if time.monotonic() >= deadline or self.preempt_requested():
+                return False
             time.sleep(0.05)
-        return False
 
     def _action(self, ud: smach.UserData, inner: Any, goal: Any, local: smach.UserData) -> str:
         local["goal"] = goal

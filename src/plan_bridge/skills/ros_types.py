@@ -212,11 +212,16 @@ def fields_of(message: Any) -> dict[str, str]:
 
 
 def type_label(message: Any) -> str:
-    """``pkg/msg/Name`` of a generated message class (its Python module says which)."""
+    """``pkg/msg/Name`` of a generated message class (its Python module says which);
+    the parts of a service or action as ``std_srvs/srv/SetBool request``."""
     module = getattr(message, "__module__", "")
     package = module.split(".", 1)[0]
     kind = module.split(".")[1] if module.count(".") >= 1 else "msg"
-    return f"{package}/{kind}/{message.__name__}"
+    name = str(message.__name__)
+    for part in ("Request", "Response", "Goal", "Result", "Feedback"):
+        if kind != "msg" and name.endswith(f"_{part}"):
+            return f"{package}/{kind}/{name.removesuffix('_' + part)} {part.lower()}"
+    return f"{package}/{kind}/{name}"
 
 
 def field_at(message: Any, path: str, *, indexes: bool = False) -> FieldType:
