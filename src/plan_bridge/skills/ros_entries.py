@@ -47,7 +47,7 @@ if TYPE_CHECKING:
     from plan_bridge.pddl.task import ActionSchema
     from plan_bridge.skills.skill_map_source import EntryLines
 
-__all__ = ["ROS_KEYS", "Fill", "RosEntry", "check_ros_entry", "is_ros_entry"]
+__all__ = ["ROS_KEYS", "Fill", "RosEntry", "check_ros_entry", "is_ros_entry", "runs_on_ros"]
 
 #: The keys that make an entry a ROS one, and the interface kind each needs.
 ROS_KEYS = {"ros_action": "action", "ros_service": "srv", "ros_topic": "msg"}
@@ -68,6 +68,22 @@ TOPIC_TIMEOUT = 10.0
 FEEDBACK_MODES = ("last", "none")
 _TABLE = re.compile(r"^(?P<file>[\w./-]+\.(?:ya?ml|json)):(?P<key>.+)$")
 _NAME = re.compile(r"^/?(?:[A-Za-z_~{][\w{}?~-]*)(?:/[A-Za-z_{][\w{}?-]*)*$")
+
+
+def runs_on_ros(folder: str | Path) -> bool:
+    """Whether the skill map of the domain ``folder`` binds an action to ROS 2 (so a
+    mission of it needs the robot's servers running: it is not a simulated mission)."""
+    from plan_bridge.skills.skill_map_source import TomlError, read_toml
+
+    path = Path(folder) / "skills.toml"
+    try:
+        data = read_toml(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, TomlError):
+        return False
+    entries = [
+        v for value in data.values() for v in (value if isinstance(value, list) else [value])
+    ]
+    return any(isinstance(entry, dict) and is_ros_entry(entry) for entry in entries)
 
 
 def is_ros_entry(element: Mapping[str, Any]) -> bool:

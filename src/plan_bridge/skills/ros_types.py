@@ -157,7 +157,7 @@ def resolve_interface(name: str, kind: str) -> Any:
         ) from None
     interface = getattr(module, type_name, None)
     if interface is None:
-        names = sorted(n for n in dir(module) if n[:1].isupper() and not n.startswith("_"))
+        names = sorted(n for n in dir(module) if n[:1].isupper() and "_" not in n)
         raise RosTypeError(
             f"type {name}: {package}/{kind} has no {type_name!r}"
             f"{did_you_mean(type_name, names)}; its {kind} types: {', '.join(names) or 'none'}"

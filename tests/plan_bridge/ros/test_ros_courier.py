@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import subprocess
 import sys
 import threading
@@ -203,3 +204,38 @@ def test_killing_the_robot_mid_drive_aborts_the_step_within_its_lease_and_the_mi
         f"\nrobot SIGKILLed mid-drive -> step aborted after {first_abort:.1f} s, mission ended "
         f"after {ended - killed:.1f} s ({executive.report.explanation})"
     )
+
+
+LEGACY_DRIVE = '''
+"""A SimpleActionState kept from a SMACH program, bound by the skill map."""
+import smach_ros
+from test_msgs.action import Fibonacci
+
+WAYPOINTS = {"mailroom": 1, "hall": 2, "lab": 3, "office": 4}
+
+
+def drive_state(robot, origin, destination):
+    return smach_ros.SimpleActionState(
+        "/courier/drive", Fibonacci, goal=Fibonacci.Goal(order=WAYPOINTS[destination]),
+        server_wait_timeout=10.0, exec_timeout=30.0,
+    )
+'''
+
+
+@pytest.mark.timeout(120)
+def test_a_map_entry_may_name_a_factory_that_returns_a_simple_action_state(
+    robots: list[Robot], tmp_path: Path
+) -> None:
+    robot = start(robots)
+    folder = tmp_path / "ported"
+    shutil.copytree(COURIER, folder, ignore=shutil.ignore_patterns("__pycache__"))
+    (folder / "legacy_drive.py").write_text(LEGACY_DRIVE, encoding="utf-8")
+    text = (folder / "skills.toml").read_text(encoding="utf-8")
+    start_at, end_at = text.index("[drive]"), text.index("[pick-up]")
+    ported = '[drive]\nfactory = "legacy_drive:drive_state"\n\n'
+    (folder / "skills.toml").write_text(text[:start_at] + ported + text[end_at:], encoding="utf-8")
+    target = load_target(folder, "p01")
+    setup = target.setup(seed=0, fail_rate=0.0)
+    executive = Executive(target.task, setup.skills)
+    assert executive.execute() == "succeeded", robot.text()
+    assert robot.wait_for(lambda line: line == "succeeded drive to lab", 5) is not None
