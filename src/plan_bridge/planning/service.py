@@ -240,8 +240,11 @@ def _parse_request(reader: Any, request: dict[str, Any]) -> dict[str, Any]:
     if request["base"] in _bases:
         _bases.move_to_end(request["base"])
         return {"outcome": "parsed", "parse_time_s": 0.0}
+    # A temporal domain is planned by Kairos first, which reads the text itself: a
+    # parse of unified-planning's now would only hold up the first solve.
+    eager = ":durative-action" not in request["domain"].lower()
     try:
-        return {"outcome": "parsed", "parse_time_s": _parse_base(reader, request)}
+        return {"outcome": "parsed", "parse_time_s": _parse_base(reader, request, eager=eager)}
     except Exception as exc:
         # The client parses the same text and reports the error properly.
         return {"outcome": "error", "error_type": type(exc).__name__, "message": str(exc)}
