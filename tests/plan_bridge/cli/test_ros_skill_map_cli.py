@@ -104,3 +104,22 @@ def test_check_probe_names_each_server_that_is_not_up_and_exits_1(
         in err
     )
     assert "4 ROS server(s) of the skill map not ready" in err
+
+
+def test_the_readmes_nav2_map_is_only_refused_for_the_missing_nav2_msgs(
+    folder: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    readme = (COURIER / "README.md").read_text(encoding="utf-8")
+    nav2 = readme.split("```toml\n", 1)[1].split("```", 1)[0]
+    skills = folder / "skills.toml"
+    text = skills.read_text(encoding="utf-8")
+    start_at, end_at = text.index("[drive]"), text.index("[pick-up]")
+    skills.write_text(text[:start_at] + nav2 + "\n" + text[end_at:], encoding="utf-8")
+    assert main(["check", str(folder), "--problem", "p01"]) == 2
+    err = capsys.readouterr().err
+    assert (
+        err.startswith(f"plan-bridge: error: {skills}:")
+        and "[drive]: type nav2_msgs/action/NavigateToPose: the message package nav2_msgs is not installed; install it: pip install ros-jazzy-nav2-msgs"
+        in err
+    )
+    assert err.count(f"{skills}:") == 1  # nothing else of the entry is refused
