@@ -322,3 +322,53 @@ def test_the_skill_of_an_entry_is_a_machine_with_its_outcomes_built_without_ros(
     }
     assert list(machine.get_children()) == ["DRIVE"]
     assert skill.outcome_problems(machine) == [] and skill.outcome_warnings(machine) == []
+
+
+def test_mistakes_in_tables_statuses_and_feedback_are_reported_at_their_lines(
+    tmp_path: Path,
+) -> None:
+    found = problems(
+        tmp_path,
+        """
+        [drive]
+        ros_action = "/drive"
+        type = "test_msgs/action/Fibonacci"
+        goal = { order = "missing.yaml:?to" }
+        status = { cancelled = "aborted" }
+        feedback = ["sequense"]
+        [grip]
+        ros_service = "/set_pose"
+        type = "nav_msgs/srv/SetMap"
+        request = { "initial_pose.pose.pose" = "poses.yaml:attic" }
+        """,
+    )
+    assert found[0].startswith(
+        "5: [drive]: status: 'cancelled' is not a terminal status (did you mean canceled?)"
+    )
+    assert found[1].startswith(
+        f'4: [drive]: goal "order": no table file {tmp_path / "missing.yaml"}'
+    )
+    assert found[2].startswith(
+        "6: [drive]: feedback \"sequense\": test_msgs/action/Fibonacci feedback has no field 'sequense' (did you mean sequence?)"
+    )
+    assert (
+        found[3]
+        == '10: [grip]: request "initial_pose.pose.pose": poses.yaml has no entry for attic (the key); its keys: hall, lab'
+    )
+    assert len(found) == 4
+
+
+def test_a_table_value_that_does_not_fit_the_field_is_reported(tmp_path: Path) -> None:
+    (message,) = problems(
+        tmp_path,
+        """
+        [drive]
+        ros_service = "/set_pose"
+        type = "nav_msgs/srv/SetMap"
+        request = { "initial_pose.pose.pose.position" = "poses.yaml:?to" }
+        """,
+    )
+    assert message == (
+        '4: [drive]: request "initial_pose.pose.pose.position": poses.yaml: hall: '
+        "geometry_msgs/msg/Point has no field 'position'; its fields: x, y, z"
+    )
