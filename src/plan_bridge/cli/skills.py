@@ -62,8 +62,9 @@ class Binding:
             "line": self.line,
             "arguments": self.arguments,
             "outcome_map": self.outcome_map,
-            "ros": self.ros,
         }
+        if self.ros is not None:
+            data["ros"] = self.ros
         if self.variant:
             data = {"variant": self.variant, **data}
         return data

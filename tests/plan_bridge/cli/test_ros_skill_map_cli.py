@@ -38,7 +38,7 @@ def test_skills_lists_the_action_service_or_topic_each_action_runs_on(
     }
     assert rows["drive"]["outcome_map"] == {"off-route": "aborted"}
     assert rows["confirm-delivery"]["ros"]["kind"] == "topic"
-    assert rows["drop"]["ros"] is None and rows["drop"]["factory"] == "legacy_states:open_gripper"
+    assert "ros" not in rows["drop"] and rows["drop"]["factory"] == "legacy_states:open_gripper"
 
 
 def test_check_reports_each_mistake_of_the_ros_entries_at_its_line_and_exits_2(
