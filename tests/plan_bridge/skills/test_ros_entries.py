@@ -372,3 +372,22 @@ def test_a_table_value_that_does_not_fit_the_field_is_reported(tmp_path: Path) -
         '4: [drive]: request "initial_pose.pose.pose.position": poses.yaml: hall: '
         "geometry_msgs/msg/Point has no field 'position'; its fields: x, y, z"
     )
+
+
+def test_the_guides_example_map_is_only_refused_for_the_missing_nav2_msgs(tmp_path: Path) -> None:
+    guide = (Path(__file__).parents[3] / "docs" / "plan-bridge.md").read_text(encoding="utf-8")
+    section = guide[guide.index("### ROS 2 entries") :]
+    block = section.split("```toml\n", 1)[1].split("```", 1)[0]
+    task = Task(
+        {
+            **TASK.actions,
+            "close-gripper": schema("close-gripper", ("r", "robot")),
+            "wait-docked": schema("wait-docked", ("r", "robot"), ("d", "place")),
+        },
+        TASK.objects,
+    )
+    (message,) = problems(tmp_path, block, task)
+    assert (
+        "[drive]: type nav2_msgs/action/NavigateToPose: the message package nav2_msgs is not installed"
+        in message
+    )
