@@ -27,10 +27,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-
-def mission_folders(domains: Path) -> list[str]:
-    """Every mission in ``domains`` (each folder with a domain.pddl), by name."""
-    return sorted(d.name for d in domains.iterdir() if (d / "domain.pddl").is_file())
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from domain_folders import mission_folders
 
 
 def sizes(path: Path) -> dict[str, int]:

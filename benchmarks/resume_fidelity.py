@@ -25,11 +25,8 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-
-def mission_folders(domains: Path) -> list[str]:
-    """Every mission in ``domains`` (each folder with a domain.pddl), by name."""
-    return sorted(d.name for d in domains.iterdir() if (d / "domain.pddl").is_file())
-
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from domain_folders import mission_folders
 
 COMPARED = ("goal_reached", "executed", "faults_injected", "sim_time_s")
 
