@@ -234,6 +234,16 @@ def table(result: dict[str, Any]) -> str:
         groups.setdefault((row["size"], row["who"]), []).append(row)
     for (size, who), rows in groups.items():
         reached = sum(r["outcome"] == "succeeded" for r in rows)
+        if who == "baseline":  # `plan` of the older revision: planning only
+            cells = " | ".join(
+                f"{statistics.median(r[key] for r in rows):.2f}"
+                if key in ("first_plan_s", "wall_s")
+                else "-"
+                for key, _ in COLUMNS
+            )
+            run = f"{result.get('baseline')} (`plan`)"
+            lines.append(f"| {size} | {run} | {reached}/{len(rows)} planned | {cells} |")
+            continue
         cells = " | ".join(f"{statistics.median(r[key] for r in rows):.2f}" for key, _ in COLUMNS)
         lines.append(f"| {size} | {who} | {reached}/{len(rows)} | {cells} |")
     return "\n".join(lines)
@@ -247,14 +257,17 @@ def plot(result: dict[str, Any], path: Path) -> None:
     import matplotlib.pyplot as plt
 
     fig, (single, fleet) = plt.subplots(1, 2, figsize=(10, 4))
-    for who, style in (("ours", "-"), ("baseline", "--")):
+    lines = (
+        ("ours", "planning_s", "-", "planning"),
+        ("ours", "load_s", "-", "pyrobosim's load"),
+        ("baseline", "planning_s", "--", f"planning, {result.get('baseline')}"),
+    )
+    for who, key, style, label in lines:
         rows = [r for r in result["rows"] if r["who"] == who and r["robots"] == 1]
         rooms = sorted({r["rooms"] for r in rows})
-        if not rooms:
-            continue
-        for key, label in (("planning_s", "planning"), ("load_s", "pyrobosim's load")):
+        if rooms:
             medians = [statistics.median(r[key] for r in rows if r["rooms"] == n) for n in rooms]
-            single.plot(rooms, medians, style, marker="o", label=f"{label} ({who})")
+            single.plot(rooms, medians, style, marker="o", label=label)
     single.set(xlabel="rooms (1 robot, 2 deliveries)", ylabel="seconds", yscale="log")
     single.legend(fontsize=8)
     fleets = [r for r in result["rows"] if r["who"] == "ours" and r["robots"] > 1]
@@ -309,10 +322,17 @@ def main() -> None:
     parser.add_argument("--json", type=Path, help="write every run's numbers here")
     parser.add_argument("--write", action="store_true", help="update docs/performance.md")
     parser.add_argument("--quick", action="store_true", help="two small sizes (a smoke test)")
+    parser.add_argument(
+        "--from-json", type=Path, help="no runs: the results of an earlier --json (for --write)"
+    )
     args = parser.parse_args()
     sizes = [Size.parse(s) for s in (QUICK_SIZES if args.quick else args.sizes).split(",")]
     seeds = [int(s) for s in args.seeds.split(",")]
-    result = measure(sizes, seeds, args.fail_rate, args.baseline)
+    if args.from_json is not None:
+        result = json.loads(args.from_json.read_text(encoding="utf-8"))
+    else:
+        result = measure(sizes, seeds, args.fail_rate, args.baseline)
+        result["command"] = "python benchmarks/scale.py " + " ".join(sys.argv[1:])
     print()
     print(table(result))
     print(
@@ -321,7 +341,7 @@ def main() -> None:
     if args.json is not None:
         args.json.write_text(json.dumps(result, indent=1), encoding="utf-8")
     if args.write:
-        write_docs(result, "python benchmarks/scale.py " + " ".join(sys.argv[1:]))
+        write_docs(result, result.get("command", "python benchmarks/scale.py"))
         print(f"wrote {DOC.relative_to(ROOT)} and {PLOT.relative_to(ROOT)}")
 
 
