@@ -24,9 +24,11 @@ from plan_bridge.maps.model import Gate, Hall, Place, RobotInfo, WorldModel, doo
 
 __all__ = ["MERGE_M", "WorldModelError", "describe_world", "robot_place"]
 
-#: Spots closer than this (metres) stand at one point: they are one place.
-MERGE_M = 0.02
-#: A robot this close to a place's point (metres) stands at it.
+#: Spots closer than this (metres) stand at one point: they are one place. (pyrobosim's
+#: pddlstream_simple_world has a room's pose 2.1 cm from a counter's.)
+MERGE_M = 0.05
+#: A robot this close to a place's point (metres) stands at it (the nearest such place:
+#: places are at least MERGE_M apart).
 AT_PLACE_M = 0.04
 #: How far inside its room a doorway stands (metres) from where the hallway leaves it.
 DOORWAY_INSET_M = 0.05
@@ -243,9 +245,11 @@ def robot_place(model: WorldModel, robot: Any) -> str:
 
     pose = robot.get_pose()
     x, y = float(pose.x), float(pose.y)
-    for place in model.places.values():
+    nearest = model.nearest_place(x, y)
+    if nearest is not None:
+        place = model.places[nearest]
         if math.hypot(place.x - x, place.y - y) < AT_PLACE_M:
-            return place.name
+            return nearest
     where = robot.location
     if isinstance(where, Hallway):
         return model.nearest_place(x, y, hall=where.name) or ""
