@@ -11,13 +11,10 @@ from __future__ import annotations
 
 import difflib
 from collections.abc import Iterable
-from typing import TYPE_CHECKING
 
 from plan_bridge.errors import PddlError
 from plan_bridge.pddl.features import ADL, classify, known, requirements_hint
-
-if TYPE_CHECKING:
-    from plan_bridge.pddl.source import SourceText
+from plan_bridge.pddl.source_text import SourceText
 
 __all__ = ["UP_REQUIREMENTS", "check_constructs", "did_you_mean"]
 

@@ -31,11 +31,10 @@ from plan_bridge.pddl.sexpr import Atom, Form, walk
 from plan_bridge.pddl.source import (
     DEFAULT_MAX_BYTES,
     DEFAULT_MAX_DEPTH,
-    SourceText,
     check_source,
-    paused_gc,
     read_source,
 )
+from plan_bridge.pddl.source_text import SourceText, paused_gc
 
 __all__ = ["FrontEnd", "analyse", "analyse_files", "parse_with_up"]
 

@@ -10,7 +10,8 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
 
-from plan_bridge.pddl.source import SourceText, Token, is_number
+from plan_bridge.pddl.source import is_number
+from plan_bridge.pddl.source_text import SourceText, Token
 
 __all__ = ["replace_init"]
 

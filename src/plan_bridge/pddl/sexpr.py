@@ -14,7 +14,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
-from plan_bridge.pddl.source import SourceText, paused_gc
+from plan_bridge.pddl.source_text import SourceText, paused_gc
 
 __all__ = ["Atom", "Form", "Node", "read_tree", "walk"]
 

@@ -6,7 +6,9 @@
   :class:`Planner` protocol;
 * :mod:`.registry`: :func:`get_planner` (every planner name) and
   :func:`installed_planners`;
-* :mod:`.planner`: unified-planning engines (:class:`UPPlanner`);
+* :mod:`.up_planner`: unified-planning engines (:class:`UPPlanner`) and which are
+  installed;
+* :mod:`.planner`: a front re-exporting the names above, where older code imports them;
 * :mod:`.engines`: ``auto`` (the engine by the problem's kind) and the warm search's
   client (:class:`~plan_bridge.planning.engines.WarmPlanner`);
 * :mod:`.portfolio`: racing Fast Downward configurations;
@@ -17,9 +19,9 @@
 
 from __future__ import annotations
 
-from plan_bridge.planning.planner import UPPlanner
 from plan_bridge.planning.registry import get_planner, installed_planners
 from plan_bridge.planning.types import Planner, PlanResult, PlanStatus, PlanStep
+from plan_bridge.planning.up_planner import UPPlanner
 
 __all__ = [
     "PlanResult",

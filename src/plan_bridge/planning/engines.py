@@ -37,9 +37,8 @@ from plan_bridge.pddl.features import ENGINES
 from plan_bridge.pddl.task import Fact, FactLike, PlanningTask
 from plan_bridge.pddl.up_runtime import ensure_unified_planning
 from plan_bridge.planning.grounding import UnsupportedProblemError
-from plan_bridge.planning.planner import SolveRequest, UPPlanner, up_kind
-from plan_bridge.planning.registry import installed_planners
 from plan_bridge.planning.types import PlanResult, PlanStatus, snapshot_values
+from plan_bridge.planning.up_planner import SolveRequest, UPPlanner, installed_planners, up_kind
 from plan_bridge.planning.warm import WARM, WarmState, solve_warm
 from plan_bridge.planning.worker import ProblemText, SolveReply, WorkerPool
 
