@@ -82,83 +82,113 @@ def test_a_module_over_600_lines_says_why_at_its_top() -> None:
     assert unexplained == [], "split these or say why at the top: " + ", ".join(unexplained)
 
 
-# -- the smach core ---------------------------------------------------------------------------
-def _smach_core_imports(src: Path) -> dict[str, set[str]]:
-    """``{core module: smach modules it imports}`` for every ``smach/*.py`` but the facade.
-
-    Every import counts, also those under ``TYPE_CHECKING`` and inside functions.
-    ``import smach`` (the facade, for the replaceable loggers and shutdown check) is
-    not an edge; ``from smach import worker_pool`` is one to ``smach.worker_pool``.
-    """
-    import ast
-
-    core = {p.stem for p in (src / "smach").glob("*.py") if p.stem != "__init__"}
-    graph: dict[str, set[str]] = {}
-    for name in sorted(core):
-        tree = ast.parse((src / "smach" / f"{name}.py").read_text(encoding="utf-8"))
-        targets: set[str] = set()
-        for node in ast.walk(tree):
-            if isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
-                if node.module == "smach":
-                    targets |= {f"smach.{a.name}" for a in node.names if a.name in core}
-                elif node.module.startswith("smach."):
-                    targets.add(node.module)
-            elif isinstance(node, ast.Import):
-                targets |= {a.name for a in node.names if a.name.startswith("smach.")}
-        graph[f"smach.{name}"] = targets
-    return graph
+# -- import circles between files --------------------------------------------------------------
+#: Import circles between files that exist today in code another change is reworking
+#: (issue 38: plan_bridge.execution, .missions, .robosim); each is one circle, its
+#: files sorted. The list only shrinks: a circle that is gone must leave it
+#: (test_every_listed_circle_still_exists), and no other may appear.
+KNOWN_FILE_CYCLES_TO_REMOVE = {
+    # The simulated clock's participants hold the world; the world owns its clock.
+    ("plan_bridge.execution.clock", "plan_bridge.execution.world"),
+    # Plans compile into layers or into a temporal dispatcher whose steps compile back.
+    (
+        "plan_bridge.execution.compile",
+        "plan_bridge.execution.temporal",
+        "plan_bridge.execution.timed_step",
+    ),
+    # Mission requests act on the executive, which serves them.
+    ("plan_bridge.execution.control", "plan_bridge.execution.executive"),
+    # A mission's target can be a world target, which is a kind of mission target.
+    ("plan_bridge.missions.mission", "plan_bridge.missions.world_target"),
+    # The pyrobosim world adopts steps and draws itself; both need the world.
+    ("plan_bridge.robosim.adopt", "plan_bridge.robosim.picture", "plan_bridge.robosim.world"),
+}
 
 
-def _cycle(graph: dict[str, set[str]]) -> list[str]:
-    """One import cycle of ``graph`` (``[a, b, ..., a]``), or ``[]`` if it has none."""
-    state: dict[str, int] = {}  # 1 on the current path, 2 done
-    path: list[str] = []
-
-    def visit(node: str) -> list[str]:
-        state[node] = 1
-        path.append(node)
-        for nxt in sorted(graph.get(node, ())):
-            if state.get(nxt) == 1:
-                return [*path[path.index(nxt) :], nxt]
-            if nxt in graph and nxt not in state:
-                found = visit(nxt)
-                if found:
-                    return found
-        path.pop()
-        state[node] = 2
-        return []
-
-    for start in sorted(graph):
-        if start not in state:
-            found = visit(start)
-            if found:
-                return found
-    return []
+def _file_cycles() -> set[tuple[str, ...]]:
+    return {tuple(cycle) for cycle in pg.file_cycles()}
 
 
-def test_smach_core_modules_import_each_other_without_cycles_counting_type_only_imports() -> None:
-    assert _cycle(_smach_core_imports(ROOT / "src")) == []
+def test_no_two_files_import_each_other_but_the_listed_circles_being_removed() -> None:
+    # Every import counts: under TYPE_CHECKING and inside functions too.
+    assert sorted(_file_cycles() - KNOWN_FILE_CYCLES_TO_REMOVE) == []
 
 
-def test_no_smach_core_module_imports_introspection_or_ros() -> None:
-    outward = {
-        module: sorted(t for t in targets if t.startswith(("smach.introspection", "smach.ros")))
-        for module, targets in _smach_core_imports(ROOT / "src").items()
-    }
-    assert {m: t for m, t in outward.items() if t} == {}
+def test_every_listed_circle_still_exists() -> None:
+    gone = sorted(KNOWN_FILE_CYCLES_TO_REMOVE - _file_cycles())
+    assert gone == [], f"remove these from KNOWN_FILE_CYCLES_TO_REMOVE: {gone}"
 
 
-def test_the_core_cycle_check_finds_a_cycle_made_only_of_type_checking_imports(
+def _package(tmp_path: Path, files: dict[str, str]) -> Path:
+    for name, text in files.items():
+        path = tmp_path / name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(text)
+    return tmp_path
+
+
+def test_an_import_inside_a_function_closes_a_circle(tmp_path: Path) -> None:
+    src = _package(
+        tmp_path,
+        {
+            "plan_bridge/__init__.py": "",
+            "plan_bridge/pddl/__init__.py": "",
+            "plan_bridge/pddl/a.py": "from plan_bridge.pddl.b import B\n",
+            "plan_bridge/pddl/b.py": (
+                "class B: ...\ndef late():\n    from plan_bridge.pddl import a\n    return a\n"
+            ),
+        },
+    )
+    assert pg.file_cycles(src) == [["plan_bridge.pddl.a", "plan_bridge.pddl.b"]]
+
+
+def test_an_import_under_type_checking_closes_a_circle(tmp_path: Path) -> None:
+    src = _package(
+        tmp_path,
+        {
+            "smach/__init__.py": "",
+            "smach/state.py": (
+                "from typing import TYPE_CHECKING\n"
+                "if TYPE_CHECKING:\n"
+                "    from smach.container import Container\n"
+            ),
+            "smach/container.py": "from .state import State\n",
+        },
+    )
+    assert pg.file_cycles(src) == [["smach.container", "smach.state"]]
+
+
+def test_a_circle_through_a_package_facade_and_round_three_files_is_found(
     tmp_path: Path,
 ) -> None:
-    pkg = tmp_path / "smach"
-    pkg.mkdir()
-    (pkg / "__init__.py").write_text("")
-    (pkg / "state.py").write_text(
-        "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from smach.container import C\n"
+    # ``import smach`` in a module the facade imports is a circle; a module's own
+    # package is not an edge, and a chain without a way back is no circle.
+    src = _package(
+        tmp_path,
+        {
+            "smach/__init__.py": "from smach.state import State\n",
+            "smach/state.py": "import smach\n",
+            "smach/leaf.py": "from smach import state\n",
+            "plan_bridge/__init__.py": "",
+            "plan_bridge/x.py": "from plan_bridge import y\n",
+            "plan_bridge/y.py": "import plan_bridge.z\n",
+            "plan_bridge/z.py": "from plan_bridge.x import X\n",
+        },
     )
-    (pkg / "container.py").write_text("from smach.state import State\n")
-    (pkg / "leaf.py").write_text("import smach\nfrom smach import state\n")
-    graph = _smach_core_imports(tmp_path)
-    assert graph["smach.leaf"] == {"smach.state"}
-    assert _cycle(graph) == ["smach.container", "smach.state", "smach.container"]
+    assert pg.file_imports(src)["smach.leaf"] == {"smach.state"}
+    assert pg.file_cycles(src) == [
+        ["plan_bridge.x", "plan_bridge.y", "plan_bridge.z"],
+        ["smach", "smach.state"],
+    ]
+
+
+# -- the smach core ---------------------------------------------------------------------------
+def test_no_smach_core_module_imports_introspection_or_ros() -> None:
+    # The core: the files smach/*.py but the package's __init__. Every import counts.
+    core = {f"smach.{p.stem}" for p in (ROOT / "src/smach").glob("*.py") if p.stem != "__init__"}
+    outward = {
+        module: sorted(t for t in targets if t.startswith(("smach.introspection", "smach.ros")))
+        for module, targets in pg.file_imports().items()
+        if module in core
+    }
+    assert {m: t for m, t in outward.items() if t} == {}

@@ -11,6 +11,11 @@ names the type that travels from one unit to the next. ``check_flows`` verifies 
 the type is defined in the producing unit and that the consuming unit imports it,
 so the picture cannot drift from the code.
 
+:func:`file_imports` and :func:`file_cycles` look at single files instead: every import
+counts there, also those under ``if TYPE_CHECKING:`` and inside functions (an import
+moved into a function still needs the other file), and no two files may need each
+other, directly or round a longer circle (tests/test_architecture.py).
+
     python tools/package_graph.py            # print the Mermaid block
     python tools/package_graph.py --write    # rewrite it in docs/architecture.md
     python tools/package_graph.py --check    # exit 1 if the doc is out of date
@@ -192,41 +197,92 @@ def build(src: Path = SRC) -> Graph:
     return graph
 
 
-def unit_cycles(graph: Graph) -> list[list[str]]:
-    """Cycles between units (strongly connected components of size > 1)."""
-    nodes = sorted({n for edge in graph.edges for n in edge})
-    succ = {n: sorted(b for a, b in graph.edges if a == n) for n in nodes}
+def strongly_connected(succ: dict[str, set[str]]) -> list[list[str]]:
+    """The circles of a directed graph: its strongly connected components of size > 1.
+
+    Each is a sorted list of its nodes, and the list is sorted. Tarjan's algorithm,
+    with an explicit stack (a long chain of files must not hit the recursion limit).
+    """
     index: dict[str, int] = {}
     low: dict[str, int] = {}
     stack: list[str] = []
     on_stack: set[str] = set()
     found: list[list[str]] = []
+    for root in sorted(succ):
+        if root in index:
+            continue
+        index[root] = low[root] = len(index)
+        stack.append(root)
+        on_stack.add(root)
+        work = [(root, iter(sorted(succ[root])))]
+        while work:
+            node, rest = work[-1]
+            nxt = next(rest, None)
+            if nxt is not None:
+                if nxt not in succ:
+                    continue
+                if nxt not in index:
+                    index[nxt] = low[nxt] = len(index)
+                    stack.append(nxt)
+                    on_stack.add(nxt)
+                    work.append((nxt, iter(sorted(succ[nxt]))))
+                elif nxt in on_stack:
+                    low[node] = min(low[node], index[nxt])
+                continue
+            work.pop()
+            if work:
+                low[work[-1][0]] = min(low[work[-1][0]], low[node])
+            if low[node] == index[node]:
+                component = []
+                while True:
+                    top = stack.pop()
+                    on_stack.discard(top)
+                    component.append(top)
+                    if top == node:
+                        break
+                if len(component) > 1:
+                    found.append(sorted(component))
+    return sorted(found)
 
-    def visit(node: str) -> None:
-        index[node] = low[node] = len(index)
-        stack.append(node)
-        on_stack.add(node)
-        for nxt in succ[node]:
-            if nxt not in index:
-                visit(nxt)
-                low[node] = min(low[node], low[nxt])
-            elif nxt in on_stack:
-                low[node] = min(low[node], index[nxt])
-        if low[node] == index[node]:
-            component = []
-            while True:
-                top = stack.pop()
-                on_stack.discard(top)
-                component.append(top)
-                if top == node:
-                    break
-            if len(component) > 1:
-                found.append(sorted(component))
 
-    for node in nodes:
-        if node not in index:
-            visit(node)
-    return found
+def unit_cycles(graph: Graph) -> list[list[str]]:
+    """Cycles between units (strongly connected components of size > 1)."""
+    nodes = {n for edge in graph.edges for n in edge}
+    return strongly_connected({n: {b for a, b in graph.edges if a == n} for n in nodes})
+
+
+def file_imports(src: Path = SRC) -> dict[str, set[str]]:
+    """``{module: project modules it imports}`` for every file under ``src``.
+
+    Every import counts: at the top, under ``if TYPE_CHECKING:``, inside a function.
+    ``from pkg import name`` is an edge to the submodule ``pkg.name`` when there is
+    one, else to ``pkg`` (its ``__init__``). The packages a module sits in are not
+    edges: Python runs them before the module whoever imports it.
+    """
+    known = {name for name, _ in modules(src)}
+    graph: dict[str, set[str]] = {}
+    for name, path in modules(src):
+        tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+        targets: set[str] = set()
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import):
+                targets |= {alias.name for alias in node.names if alias.name in known}
+            elif isinstance(node, ast.ImportFrom):
+                base = _resolve(name, path.name == "__init__.py", node)
+                for alias in node.names:
+                    sub = f"{base}.{alias.name}"
+                    if sub in known:
+                        targets.add(sub)
+                    elif base in known:
+                        targets.add(base)
+        targets.discard(name)
+        graph[name] = targets
+    return graph
+
+
+def file_cycles(src: Path = SRC) -> list[list[str]]:
+    """Every import circle between files under ``src`` (see :func:`file_imports`)."""
+    return strongly_connected(file_imports(src))
 
 
 def check_flows(graph: Graph) -> list[str]:

@@ -14,11 +14,11 @@ import threading
 from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
 from typing import Any, ClassVar
 
-import smach
 from smach import worker_pool
 from smach.container import Container, construction_method
 from smach.events import Event, StateEntered, StateExited
 from smach.exceptions import InvalidStateError, InvalidUserCodeError
+from smach.log import loggers
 from smach.state import State
 from smach.user_data import Remapper, UserData
 from smach.util import key_list
@@ -341,7 +341,7 @@ class Concurrence(Container):
             unserviced = [c for c in children if c.state._preempt_requested]
             for child in unserviced:
                 child.state.recall_preempt()
-                smach.logwarn(f"{self._path}/{child.label} did not service a preempt request")
+                loggers.logwarn(f"{self._path}/{child.label} did not service a preempt request")
             if not unserviced:
                 self.service_preempt()
                 if "preempted" in self._outcomes:
@@ -414,10 +414,10 @@ class Concurrence(Container):
         ]
 
     def _log_started(self) -> None:
-        smach.loginfo(f"Concurrence starting with userdata: \n\t{list(self._userdata.keys())}")
+        loggers.loginfo(f"Concurrence starting with userdata: \n\t{list(self._userdata.keys())}")
 
     def _log_exited(self, label: str, outcome: str | None) -> None:
-        smach.loginfo(f"Concurrent state '{label}' returned outcome '{outcome}' on termination.")
+        loggers.loginfo(f"Concurrent state '{label}' returned outcome '{outcome}' on termination.")
 
     def _log_terminated(self, outcome: str | None) -> None:
-        smach.loginfo(f"Concurrent Outcomes: {dict(self._child_outcomes)}")
+        loggers.loginfo(f"Concurrent Outcomes: {dict(self._child_outcomes)}")

@@ -23,7 +23,6 @@ import time
 from collections.abc import Callable, Sequence
 from typing import Any, ClassVar
 
-import smach as _smach
 from smach.events import (
     Capture,
     ContainerStarted,
@@ -36,6 +35,7 @@ from smach.events import (
     Transition,
     event_of,
 )
+from smach.log import loggers
 from smach.runtime import Runtime
 from smach.user_data import UserData
 
@@ -136,7 +136,7 @@ class ContainerEvents:
             try:
                 cb(*args, *extra)
             except Exception as exc:
-                _smach.logerr(
+                loggers.logerr(
                     f"{self._path}: {kind} callback {getattr(cb, '__qualname__', cb)!r} raised "
                     f"{type(exc).__name__}: {exc}"
                 )
@@ -157,7 +157,7 @@ class ContainerEvents:
     # The start and termination lines take what they show from the container (one call
     # per line: this runs once per container run whenever loggers are installed).
     def _log_started(self) -> None:
-        _smach.loginfo(f"{type(self).__name__} {self._path} starting in {self._start_states()}")
+        loggers.loginfo(f"{type(self).__name__} {self._path} starting in {self._start_states()}")
 
     def _log_entered(self, label: str) -> None:
         """No line by default (the original SMACH wrote none)."""
@@ -166,12 +166,12 @@ class ContainerEvents:
         """No line by default (the original SMACH wrote none)."""
 
     def _log_transition(self, source: str, outcome: str, target: str) -> None:
-        _smach.loginfo(
+        loggers.loginfo(
             f"{type(self).__name__} {self._path} transitioning '{source}':'{outcome}'-->'{target}'"
         )
 
     def _log_terminated(self, outcome: str | None) -> None:
-        _smach.loginfo(
+        loggers.loginfo(
             f"{type(self).__name__} {self._path} terminating "
             f"{self._terminal_states()} with outcome '{outcome}'"
         )

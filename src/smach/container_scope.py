@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from typing import Any
 
-import smach as _smach
+from smach.log import loggers
 from smach.user_data import MISSING, Remapper, UserData
 
 __all__ = ["ContainerScope", "CopyPlan"]
@@ -61,7 +61,7 @@ class ContainerScope:
             if value is not MISSING:
                 local[key] = value
             elif key not in local:
-                _smach.logwarn(
+                loggers.logwarn(
                     f"{self._path}: input key {key!r} is not available in the parent userdata"
                 )
 

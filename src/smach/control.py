@@ -47,6 +47,7 @@ from typing import Any, Literal
 from smach.container import Container
 from smach.events import CaptureListener
 from smach.exceptions import SmachError
+from smach.log import loggers
 from smach.state import State
 
 __all__ = [
@@ -578,6 +579,4 @@ class Controller:
                     observer(record)
                 except Exception as exc:
                     self.remove_observer(observer)
-                    import smach
-
-                    smach.logerr(f"control observer {observer!r} raised {exc!r}; it was removed")
+                    loggers.logerr(f"control observer {observer!r} raised {exc!r}; it was removed")

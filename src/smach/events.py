@@ -31,6 +31,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, fields
 from typing import Any, ClassVar
 
+from smach.log import loggers
 from smach.summary import Summary, frozen
 
 __all__ = [
@@ -341,6 +342,4 @@ class EventBus:
 
     def _detach(self, listener: Any, exc: Exception) -> None:
         self.remove(listener)
-        import smach
-
-        smach.logerr(f"event listener {listener!r} raised {exc!r}; it was detached")
+        loggers.logerr(f"event listener {listener!r} raised {exc!r}; it was detached")

@@ -10,13 +10,13 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any
 
-import smach
 from smach.container import Container, construction_method
 from smach.exceptions import InvalidStateError, InvalidUserCodeError
+from smach.log import loggers
 from smach.state import State
 from smach.user_data import Remapper, UserData
 from smach.util import is_shutdown as _never
-from smach.util import key_list
+from smach.util import key_list, shutdown
 
 __all__ = ["Iterator"]
 
@@ -151,7 +151,7 @@ class Iterator(Container):
         self._index = 0
         preempted = False
         while True:
-            if smach.is_shutdown is not _never and smach.is_shutdown():
+            if shutdown.check is not _never and shutdown.check():
                 return None
             try:
                 item = next(iterator)
@@ -168,7 +168,7 @@ class Iterator(Container):
                 outcome = self.step_child(label, state, remapper, thread)
             else:  # nobody listens, no request to forward: _step inlined
                 if log:
-                    smach.loginfo(f"Iterating item {self._index} of {path}")
+                    loggers.loginfo(f"Iterating item {self._index} of {path}")
                 try:
                     outcome = state.execute(remapper)
                 except Exception as exc:
@@ -223,7 +223,7 @@ class Iterator(Container):
         return edges
 
     def _log_entered(self, label: str) -> None:
-        smach.loginfo(f"Iterating item {self._index} of {self._path}")
+        loggers.loginfo(f"Iterating item {self._index} of {self._path}")
 
     def _log_transition(self, source: str, outcome: str, target: str) -> None:
         """No line per loop: the item's line says it (as in the original SMACH)."""

@@ -1,9 +1,12 @@
 """Logging hooks of smach.
 
-The four functions ``loginfo``, ``logwarn``, ``logdebug`` and ``logerr`` are module
-attributes of :mod:`smach`; library code looks them up there at call time, so
-``smach.set_loggers(...)`` (or plain assignment) takes effect everywhere at once.
-By default they forward to the Python logger named ``"smach"``.
+The four loggers ``loginfo``, ``logwarn``, ``logdebug`` and ``logerr`` that smach
+calls are held by :data:`loggers`; library code looks them up there at call time
+(``loggers.logwarn(...)``). ``smach.loginfo`` and the three others are views of it
+(the ``smach`` module's type makes them so), so ``smach.set_loggers(...)`` or plain
+assignment (``smach.loginfo = f``, as in the original) takes effect everywhere at
+once, and no module of smach imports the ``smach`` package for them. By default
+they forward to the Python logger named ``"smach"`` (the functions of this module).
 
 Messages about normal execution (transitions, starts, terminations) are produced by a
 listener of the event stream, and only when someone would see them: when custom
@@ -13,11 +16,10 @@ loggers are installed, or when the ``smach`` logger is enabled for INFO.
 from __future__ import annotations
 
 import logging
-import sys
 from collections.abc import Callable
 from typing import Any
 
-__all__ = ["logdebug", "logerr", "loginfo", "logwarn", "set_loggers"]
+__all__ = ["Loggers", "logdebug", "logerr", "loggers", "loginfo", "logwarn", "set_loggers"]
 
 LogFunction = Callable[[Any], Any]
 
@@ -44,16 +46,28 @@ def logerr(msg: Any) -> None:
     _logger.error("%s", msg)
 
 
-_DEFAULTS = {"loginfo": loginfo, "logwarn": logwarn, "logdebug": logdebug, "logerr": logerr}
+class Loggers:
+    """The four loggers smach calls now (``smach.loginfo`` and the others read and set
+    these attributes)."""
+
+    __slots__ = ("logdebug", "logerr", "loginfo", "logwarn")
+
+    def __init__(self) -> None:
+        self.loginfo: LogFunction = loginfo
+        self.logwarn: LogFunction = logwarn
+        self.logdebug: LogFunction = logdebug
+        self.logerr: LogFunction = logerr
+
+
+#: The loggers of this process.
+loggers = Loggers()
 
 
 def set_loggers(
     info: LogFunction, warn: LogFunction, debug: LogFunction, error: LogFunction
 ) -> None:
     """Replace the four loggers of smach (argument order as in the original SMACH)."""
-    smach = sys.modules["smach"]
-    for name, fn in (("loginfo", info), ("logwarn", warn), ("logdebug", debug), ("logerr", error)):
-        setattr(smach, name, fn)
+    loggers.loginfo, loggers.logwarn, loggers.logdebug, loggers.logerr = info, warn, debug, error
 
 
 def info_enabled() -> bool:
@@ -65,8 +79,7 @@ def info_enabled() -> bool:
     ``get_effective_level()`` above INFO (an rclpy/rcutils logger, whose INFO is 20
     too). Then no container formats a line that would be dropped.
     """
-    smach = sys.modules["smach"]
-    info = smach.loginfo
+    info = loggers.loginfo
     if info is loginfo:
         return _logger.isEnabledFor(logging.INFO)
     return _drops_info(info) is not True
@@ -90,6 +103,4 @@ def _drops_info(info: Any) -> bool | None:
 
 def restore_default_loggers() -> None:
     """Put the default (Python ``logging``) loggers back."""
-    smach = sys.modules["smach"]
-    for name, fn in _DEFAULTS.items():
-        setattr(smach, name, fn)
+    set_loggers(loginfo, logwarn, logdebug, logerr)

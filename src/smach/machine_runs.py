@@ -25,12 +25,12 @@ import threading
 import time
 from typing import Any, ClassVar, NoReturn
 
-import smach as _smach
 from smach.container import Container
 from smach.events import Capture, StateExited, Transition
 from smach.exceptions import InvalidOutcomeError, InvalidStateError, InvalidUserCodeError
 from smach.state import State
 from smach.user_data import Remapper, UserData
+from smach.util import shutdown
 
 __all__ = ["MachineRuns", "Slot"]
 
@@ -233,7 +233,7 @@ class MachineRuns(Container):
     def _no_transition(self, slot: Slot, outcome: object) -> None:
         """``outcome`` of ``slot`` has no transition: raise the error, unless smach is
         shutting down (the state returned None; the machine then returns None)."""
-        if outcome is None and _smach.is_shutdown():
+        if outcome is None and shutdown.check():
             return
         raise self._missing_transition(slot, outcome) from None
 

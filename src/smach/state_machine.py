@@ -17,19 +17,19 @@ import time
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
-import smach
 from smach.container import Container, construction_method
 from smach.events import Capture
 from smach.exceptions import (
     InvalidStateError,
     InvalidTransitionError,
 )
+from smach.log import loggers
 from smach.machine_runs import MachineRuns, Slot
 from smach.runtime import Runtime
 from smach.state import State
 from smach.user_data import UserData
 from smach.util import is_shutdown as _never
-from smach.util import key_list
+from smach.util import key_list, shutdown
 
 __all__ = ["StateMachine"]
 
@@ -322,7 +322,7 @@ class StateMachine(MachineRuns):
                     outcome = result
                     ascending = watched = False  # (a child is run inline only unwatched)
                 # The default check never says yes; skip the call unless replaced.
-                elif smach.is_shutdown is not _never and smach.is_shutdown():
+                elif shutdown.check is not _never and shutdown.check():
                     result = None  # (the run stops before its next state)
                     ascending = True
                     continue
@@ -367,7 +367,7 @@ class StateMachine(MachineRuns):
                 if watched:
                     pending = sm._report_step(slot, outcome, target, sm._thread)
                 elif log:  # (the line of _log_transition, without a call per transition)
-                    smach.loginfo(
+                    loggers.loginfo(
                         f"State machine transitioning '{label}':'{outcome}'-->'{target.label}'"
                     )
                 slot = target
@@ -455,14 +455,14 @@ class StateMachine(MachineRuns):
             shown = str([*keys])
             if len(_KEY_LISTS) < _KEY_LISTS_MAX:
                 _KEY_LISTS[keys] = shown
-        smach.loginfo(
+        loggers.loginfo(
             f"State machine starting in initial state '{self._initial_state_label}' with "
             f"userdata: \n\t{shown}"
         )
 
     def _log_transition(self, source: str, outcome: str, target: str) -> None:
-        smach.loginfo(f"State machine transitioning '{source}':'{outcome}'-->'{target}'")
+        loggers.loginfo(f"State machine transitioning '{source}':'{outcome}'-->'{target}'")
 
     def _log_terminated(self, outcome: str | None) -> None:
         label, last = self._last_exit
-        smach.loginfo(f"State machine terminating '{label}':'{last}':'{outcome}'")
+        loggers.loginfo(f"State machine terminating '{label}':'{last}':'{outcome}'")

@@ -13,6 +13,8 @@ import threading
 import time
 from collections.abc import Callable
 
+from smach.log import loggers
+
 __all__ = ["TimerHandle", "schedule"]
 
 
@@ -57,9 +59,7 @@ def _serve() -> None:
         try:
             handle.callback()
         except Exception as exc:  # a timer callback must never kill the timer thread
-            import smach
-
-            smach.logerr(f"timer callback {handle.callback!r} raised {exc!r}")
+            loggers.logerr(f"timer callback {handle.callback!r} raised {exc!r}")
 
 
 def schedule(delay: float, callback: Callable[[], object]) -> TimerHandle:

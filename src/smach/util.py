@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import functools
-import sys
 from collections.abc import Callable, Iterable
 from typing import Any
 
@@ -11,10 +10,12 @@ from smach.exceptions import InvalidStateError
 
 __all__ = [
     "CBInterface",
+    "ShutdownCheck",
     "cb_interface",
     "has_smach_interface",
     "is_shutdown",
     "set_shutdown_check",
+    "shutdown",
 ]
 
 
@@ -23,9 +24,23 @@ def is_shutdown() -> bool:
     return False
 
 
+class ShutdownCheck:
+    """The shutdown check containers call between states, replaceable at run time
+    (``smach.is_shutdown`` reads and sets :attr:`check`)."""
+
+    __slots__ = ("check",)
+
+    def __init__(self) -> None:
+        self.check: Callable[[], bool] = is_shutdown
+
+
+#: The shutdown check of this process; :func:`is_shutdown` (never) by default.
+shutdown = ShutdownCheck()
+
+
 def set_shutdown_check(cb: Callable[[], bool]) -> None:
     """Install ``cb`` as ``smach.is_shutdown`` (checked by containers between states)."""
-    setattr(sys.modules["smach"], "is_shutdown", cb)  # noqa: B010  (ModuleType has no such attribute for mypy)
+    shutdown.check = cb
 
 
 def key_list(value: Iterable[str] | None, what: str) -> list[str]:

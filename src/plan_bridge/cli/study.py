@@ -10,14 +10,8 @@ from typing import Any
 
 from plan_bridge.cli.base import EXIT_OK, Command, fail
 from plan_bridge.study.report import authoring_cost, fault_model, write_report
-from plan_bridge.study.runs import (
-    APPROACHES,
-    DEFAULT_APPROACHES,
-    RunSpec,
-    inapplicable,
-    read_results,
-    run_study,
-)
+from plan_bridge.study.runs import APPROACHES, DEFAULT_APPROACHES, RunSpec, inapplicable
+from plan_bridge.study.schedule import read_results, run_study
 
 
 def _float_list(text: str) -> list[float]:

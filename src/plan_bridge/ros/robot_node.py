@@ -2,10 +2,11 @@
 
 Reads the command line, loads the target (a domain folder with its own skills and
 simulated world, a pyrobosim world, or a bare domain for symbolic actions), builds
-its world and skills, and serves them with a :class:`~plan_bridge.ros.skill_server.SkillServer`
-on a ROS 2 node until SIGINT or SIGTERM (or, with ``--exit-with-parent``, until the
-process that started it is gone). See :mod:`plan_bridge.ros.skill_server` for what
-it serves and prints.
+its world and skills, and serves them on a ROS 2 node with the server
+:func:`run_robot_node` is given (:mod:`plan_bridge.ros.skill_server`'s ``main`` gives
+its :class:`~plan_bridge.ros.skill_server.SkillServer`) until SIGINT or SIGTERM (or,
+with ``--exit-with-parent``, until the process that started it is gone). See
+:mod:`plan_bridge.ros.skill_server` for what it serves and prints.
 """
 
 from __future__ import annotations
@@ -17,18 +18,31 @@ import os
 import signal
 import sys
 import threading
-from collections.abc import Sequence
-from typing import Any
+from collections.abc import Callable, Sequence
+from typing import Any, Protocol
 
 from plan_bridge.errors import PlanBridgeError
 from plan_bridge.execution.simulation import SimulatedWorld
 from plan_bridge.ros.lease import select_short_lease
 from plan_bridge.ros.pacing import Pacer, pace
-from plan_bridge.ros.skill_server import SkillServer
 from smach.ros._api import ExternalShutdownException, MultiThreadedExecutor, rclpy
 from smach.ros.executor import wait_for_callbacks
 
-__all__ = ["main"]
+__all__ = ["RobotServer", "run_robot_node"]
+
+
+class RobotServer(Protocol):
+    """What the process needs of the server it runs (a
+    :class:`~plan_bridge.ros.skill_server.SkillServer`): to stop its skills, then to go."""
+
+    def halt_all(self) -> None: ...
+
+    def destroy(self) -> None: ...
+
+
+#: Makes the server: called with the node, the world and the keywords of
+#: :class:`~plan_bridge.ros.skill_server.SkillServer`.
+ServerFactory = Callable[..., RobotServer]
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -154,7 +168,9 @@ def _meta(args: argparse.Namespace, robot: _Robot) -> dict[str, Any]:
     return meta
 
 
-def main(argv: Sequence[str] | None = None) -> int:
+def run_robot_node(argv: Sequence[str] | None, make_server: ServerFactory) -> int:
+    """Parse ``argv``, load the target and serve it with ``make_server``'s server; the
+    exit status (2: the command line or the target is unfit)."""
     parser = _parser()
     args = parser.parse_args(argv)
     if args.problem and args.problem_file:
@@ -170,7 +186,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     profile = select_short_lease(args.lease)
     try:
-        _serve(args, robot)
+        _serve(args, robot, make_server)
     finally:
         if robot.robosim:
             robot.world.close()
@@ -180,7 +196,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     return 0
 
 
-def _serve(args: argparse.Namespace, robot: _Robot) -> None:
+def _serve(args: argparse.Namespace, robot: _Robot, make_server: ServerFactory) -> None:
     """Serve the robot's skills on a node until SIGINT/SIGTERM (or the parent exits)."""
     parent = os.getppid()
     rclpy.init()
@@ -189,7 +205,7 @@ def _serve(args: argparse.Namespace, robot: _Robot) -> None:
     def say(line: str) -> None:
         print(line, flush=True)
 
-    server = SkillServer(
+    server = make_server(
         node,
         robot.world,
         task=robot.target.task if robot.robosim else None,

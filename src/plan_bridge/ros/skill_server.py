@@ -73,6 +73,7 @@ from plan_bridge.ros.protocol import (
     interfaces,
     task_digest,
 )
+from plan_bridge.ros.robot_node import run_robot_node
 from plan_bridge.skills.registry import SkillError, SkillRegistry
 from smach.introspection.events import Event, StateEntered
 from smach.ros._api import (
@@ -561,10 +562,9 @@ def _robosim_facts(world: RobosimWorld, task: PlanningTask) -> set[Fact]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """The robot node's command line (:mod:`plan_bridge.ros.robot_node`)."""
-    from plan_bridge.ros.robot_node import main as run_node
-
-    return run_node(argv)
+    """The robot node's command line: :mod:`plan_bridge.ros.robot_node` serving with a
+    :class:`SkillServer`."""
+    return run_robot_node(argv, SkillServer)
 
 
 if __name__ == "__main__":

@@ -25,7 +25,7 @@ from plan_bridge.pddl.constructs import did_you_mean
 from plan_bridge.skills.registry import REQUIRED_OUTCOMES, SkillFactory
 from plan_bridge.skills.ros_entries import ROS_KEYS, check_ros_entry, is_ros_entry
 from plan_bridge.skills.ros_skill_states import RosSkill
-from plan_bridge.skills.skill_map import (
+from plan_bridge.skills.skill_map_model import (
     ENTRY_KEYS,
     ConstantPick,
     MapProblem,
@@ -50,7 +50,7 @@ from plan_bridge.skills.skill_map_source import (
 
 if TYPE_CHECKING:
     from plan_bridge.pddl.task import ActionSchema
-    from plan_bridge.skills.skill_map import HasActions
+    from plan_bridge.skills.skill_map_model import HasActions
 
 __all__ = ["check_skill_map"]
 

@@ -25,15 +25,12 @@ import hmac
 import json
 import secrets
 from collections.abc import Callable, Mapping
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import Any, Protocol
 
 from smach.container import Container
 from smach.control import ControlError, Controller
 
-if TYPE_CHECKING:
-    from smach.introspection.server import ViewerServer
-
-__all__ = ["MAX_BODY", "ViewerControls", "enable_controls"]
+__all__ = ["MAX_BODY", "ControlledViewer", "ViewerControls", "enable_controls"]
 
 MAX_BODY = 16 * 1024
 
@@ -181,8 +178,19 @@ def _perform_core(
         getattr(ctl, action)(source=source)
 
 
+class ControlledViewer(Protocol):
+    """What :func:`enable_controls` needs of a viewer (a
+    :class:`~smach.introspection.server.ViewerServer`, which imports this module): where
+    its control endpoints are, and its address."""
+
+    controls: ViewerControls | None
+
+    @property
+    def url(self) -> str: ...
+
+
 def enable_controls(
-    viewer: ViewerServer,
+    viewer: ControlledViewer,
     controller: Controller,
     *,
     token: str | None = None,

@@ -25,6 +25,7 @@ from typing import IO, Any
 
 from smach.introspection.journal_lines import StructureItem, line_of, lines_of
 from smach.introspection.journal_structures import read_tree, resolve
+from smach.log import loggers
 from smach.state import State
 
 __all__ = ["JournalWriter"]
@@ -166,9 +167,7 @@ class JournalWriter:
     def _fail(self, exc: BaseException) -> None:
         self.error = exc
         self.pending.clear()
-        import smach
-
-        smach.logerr(f"journal: writing failed: {exc!r}; it was detached")
+        loggers.logerr(f"journal: writing failed: {exc!r}; it was detached")
         if self.on_error is not None:
             self.on_error()
 
