@@ -192,3 +192,13 @@ def test_no_smach_core_module_imports_introspection_or_ros() -> None:
         if module in core
     }
     assert {m: t for m, t in outward.items() if t} == {}
+
+
+def test_plan_bridge_imports_no_private_module_of_smach() -> None:
+    # rclpy's names come from smach.ros.rclpy_api, not smach.ros._api (issue 38).
+    private = {
+        module: sorted(t for t in targets if t.startswith("smach") and "._" in t)
+        for module, targets in pg.file_imports().items()
+        if module.startswith("plan_bridge")
+    }
+    assert {m: t for m, t in private.items() if t} == {}

@@ -136,7 +136,7 @@ class RobotConnection:
             self._spawn()
         else:
             self._say(f"ros: connecting to the running robot node under /{self.prefix} ({where})")
-        from smach.ros._api import rclpy
+        from smach.ros.rclpy_api import rclpy
 
         self.context = rclpy.Context()
         rclpy.init(context=self.context)
@@ -180,8 +180,8 @@ class RobotConnection:
     def _listen_to_heartbeat(self) -> None:
         """Hear the robot's heartbeat (protocol.HEARTBEAT_TOPIC) on smach's helper node,
         which is spun whether or not anybody spins ``self.node``."""
-        from smach.ros._api import StringMsg
         from smach.ros.executor import SmachExecutor, subscription_events
+        from smach.ros.rclpy_api import StringMsg
 
         helper = SmachExecutor.for_node(self.node)
         topic = f"/{self.prefix}/{HEARTBEAT_TOPIC}"
@@ -370,7 +370,7 @@ class RobotConnection:
                 helper.shutdown()
             if self.node is not None:
                 self.node.destroy_node()
-            from smach.ros._api import rclpy
+            from smach.ros.rclpy_api import rclpy
 
             rclpy.try_shutdown(context=self.context)
             self.context = None

@@ -68,9 +68,9 @@ class KnowledgeServices:
     def __init__(
         self, node: Any, knowledge: KnowledgeBase, *, name: str = "knowledge", source: str = "ros"
     ) -> None:
-        # smach.ros._api loads rclpy with its one known warning silenced.
-        from smach.ros._api import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+        # smach.ros.rclpy_api loads rclpy with its one known warning silenced.
         from smach.ros.executor import SmachExecutor, publisher_events
+        from smach.ros.rclpy_api import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
         basic = importlib.import_module("test_msgs.srv").BasicTypes
         trigger = importlib.import_module("std_srvs.srv").Trigger

@@ -181,7 +181,7 @@ def task_digest(task: PlanningTask) -> str:
 
 def interfaces() -> tuple[Any, Any, Any]:
     """The message types: (Fibonacci action, BasicTypes service, Trigger service)."""
-    import smach.ros._api  # noqa: F401  (loads rclpy with its one known warning silenced)
+    import smach.ros.rclpy_api  # noqa: F401  (loads rclpy with its one known warning silenced)
 
     fibonacci = importlib.import_module("test_msgs.action").Fibonacci
     basic_types = importlib.import_module("test_msgs.srv").BasicTypes

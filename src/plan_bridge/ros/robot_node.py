@@ -25,8 +25,8 @@ from plan_bridge.errors import PlanBridgeError
 from plan_bridge.execution.simulation import SimulatedWorld
 from plan_bridge.ros.lease import select_short_lease
 from plan_bridge.ros.pacing import Pacer, pace
-from smach.ros._api import ExternalShutdownException, MultiThreadedExecutor, rclpy
 from smach.ros.executor import wait_for_callbacks
+from smach.ros.rclpy_api import ExternalShutdownException, MultiThreadedExecutor, rclpy
 
 __all__ = ["RobotServer", "run_robot_node"]
 

@@ -76,14 +76,14 @@ from plan_bridge.ros.protocol import (
 from plan_bridge.ros.robot_node import run_robot_node
 from plan_bridge.skills.registry import SkillError, SkillRegistry
 from smach.introspection.events import Event, StateEntered
-from smach.ros._api import (
+from smach.ros.executor import publisher_events
+from smach.ros.rclpy_api import (
     ActionServer,
     CancelResponse,
     GoalResponse,
     ReentrantCallbackGroup,
     StringMsg,
 )
-from smach.ros.executor import publisher_events
 
 if TYPE_CHECKING:
     from plan_bridge.robosim.world import RobosimWorld

@@ -25,7 +25,7 @@ from plan_bridge.ros.protocol import (
 )
 from plan_bridge.skills.registry import SkillRegistry
 from smach.ros import ServiceState, SimpleActionState
-from smach.ros._api import GoalStatus
+from smach.ros.rclpy_api import GoalStatus
 
 __all__ = ["remote_facts", "remote_info", "ros_skill", "ros_skills"]
 

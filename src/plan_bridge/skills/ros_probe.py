@@ -85,7 +85,7 @@ def probe_skill_map(skill_map: SkillMap, task: Any, *, timeout: float = 3.0) -> 
         wanted.extend((map_entry, name) for name in ground_names(ros, objects_of_type, types))
     if not wanted:
         return []
-    from smach.ros._api import rclpy
+    from smach.ros.rclpy_api import rclpy
 
     context = rclpy.Context()
     rclpy.init(context=context)
@@ -98,7 +98,7 @@ def probe_skill_map(skill_map: SkillMap, task: Any, *, timeout: float = 3.0) -> 
 
 
 def _look(node: Any, wanted: list[tuple[SkillMapEntry, str]], deadline: float) -> list[ProbeResult]:
-    from smach.ros._api import ActionClient
+    from smach.ros.rclpy_api import ActionClient
 
     clients: dict[int, Any] = {}
     for index, (map_entry, name) in enumerate(wanted):

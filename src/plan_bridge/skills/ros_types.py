@@ -114,7 +114,7 @@ def _ros_loaded() -> str | None:
     """None once rclpy is importable (loaded through smach.ros, which silences its
     generator's one known DeprecationWarning); else why not."""
     try:
-        importlib.import_module("smach.ros._api")
+        importlib.import_module("smach.ros.rclpy_api")
     except ImportError as exc:
         return str(exc)
     return None

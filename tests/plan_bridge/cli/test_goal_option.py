@@ -227,7 +227,7 @@ def test_the_journal_keeps_the_goal_and_resume_takes_it_from_there(
 def test_a_robot_node_started_with_ros_judges_the_given_goal(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    pytest.importorskip("smach.ros._api", reason="needs rclpy (the ros extra)")
+    pytest.importorskip("smach.ros.rclpy_api", reason="needs rclpy (the ros extra)")
     # The file's goal (visited wp2) is off the way to wp3: a robot node judging the
     # mission by it would report the goal not reached.
     args = ["--goal", "(visited wp3)", "--ros", "--quiet", "--json"]

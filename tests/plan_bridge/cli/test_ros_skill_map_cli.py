@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-pytest.importorskip("smach.ros._api", reason="needs rclpy (the ros extra)")
+pytest.importorskip("smach.ros.rclpy_api", reason="needs rclpy (the ros extra)")
 
 from plan_bridge.cli import main
 

@@ -11,7 +11,7 @@ from typing import Any
 
 import pytest
 
-pytest.importorskip("smach.ros._api", reason="needs rclpy (the ros extra)")
+pytest.importorskip("smach.ros.rclpy_api", reason="needs rclpy (the ros extra)")
 
 from std_msgs.msg import String
 from std_srvs.srv import Trigger
@@ -29,8 +29,8 @@ from plan_bridge.ros import remote_facts
 from plan_bridge.ros.connection import RobotConnection
 from plan_bridge.ros.knowledge_services import KnowledgeServices
 from plan_bridge.skills.registry import SkillRegistry
-from smach.ros._api import DurabilityPolicy, QoSProfile, ReliabilityPolicy, rclpy
 from smach.ros.executor import SmachExecutor
+from smach.ros.rclpy_api import DurabilityPolicy, QoSProfile, ReliabilityPolicy, rclpy
 
 ROOMS = Path(__file__).parents[1] / "data" / "rooms"
 

@@ -9,7 +9,7 @@ import xml.etree.ElementTree as ET
 import pytest
 
 # plan_bridge.ros (the package) imports its ROS clients, hence rclpy.
-pytest.importorskip("smach.ros._api", reason="needs rclpy (the ros extra)")
+pytest.importorskip("smach.ros.rclpy_api", reason="needs rclpy (the ros extra)")
 
 from plan_bridge.ros.lease import select_short_lease
 from smach.ros.dds import profiles_variable

@@ -10,7 +10,7 @@ from typing import Any
 
 import pytest
 
-pytest.importorskip("smach.ros._api", reason="needs rclpy (the ros extra)")
+pytest.importorskip("smach.ros.rclpy_api", reason="needs rclpy (the ros extra)")
 
 from test_msgs.srv import BasicTypes
 
@@ -22,8 +22,8 @@ from plan_bridge.pddl.task import load_task
 from plan_bridge.planning.planner import PlanStep, get_planner
 from plan_bridge.skills.registry import SkillRegistry
 from smach.ros import IntrospectionServer
-from smach.ros._api import rclpy
 from smach.ros.executor import SmachExecutor
+from smach.ros.rclpy_api import rclpy
 
 ROOMS = Path(__file__).parents[1] / "data" / "rooms"
 

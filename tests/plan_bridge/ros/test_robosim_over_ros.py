@@ -21,7 +21,7 @@ from typing import Any
 
 import pytest
 
-pytest.importorskip("smach.ros._api", reason="needs rclpy (the ros extra)")
+pytest.importorskip("smach.ros.rclpy_api", reason="needs rclpy (the ros extra)")
 pytest.importorskip("pyrobosim", reason="pyrobosim is not installed (the sim extra)")
 
 import smach

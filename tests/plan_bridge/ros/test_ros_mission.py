@@ -14,16 +14,16 @@ from typing import Any
 
 import pytest
 
-pytest.importorskip("smach.ros._api", reason="needs rclpy (the ros extra)")
+pytest.importorskip("smach.ros.rclpy_api", reason="needs rclpy (the ros extra)")
 
 from plan_bridge.execution.executive import Executive, ReplanPolicy
 from plan_bridge.pddl.task import PlanningTask, load_task
 from plan_bridge.planning.planner import PlanStep, get_planner
 from plan_bridge.ros import decode_result, encode_result, remote_facts, ros_skill, ros_skills
 from plan_bridge.ros.protocol import action_topic
-from smach.ros._api import rclpy
 from smach.ros.dds import profile_environment
 from smach.ros.executor import SmachExecutor
+from smach.ros.rclpy_api import rclpy
 
 pytestmark = pytest.mark.ros
 

@@ -12,7 +12,7 @@ from typing import Any
 
 import pytest
 
-pytest.importorskip("smach.ros._api", reason="needs rclpy (the ros extra)")
+pytest.importorskip("smach.ros.rclpy_api", reason="needs rclpy (the ros extra)")
 
 from plan_bridge.execution.simulation import SimulatedWorld
 from plan_bridge.pddl.task import load_task
@@ -20,8 +20,8 @@ from plan_bridge.planning.planner import PlanStep
 from plan_bridge.ros import ros_skill
 from plan_bridge.ros.protocol import HEARTBEAT_TOPIC
 from plan_bridge.ros.skill_server import SkillServer
-from smach.ros._api import MultiThreadedExecutor, StringMsg, rclpy
 from smach.ros.executor import SmachExecutor, subscription_events, wait_for_callbacks
+from smach.ros.rclpy_api import MultiThreadedExecutor, StringMsg, rclpy
 
 pytestmark = pytest.mark.ros
 

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-pytest.importorskip("smach.ros._api", reason="needs rclpy (the ros extra)")
+pytest.importorskip("smach.ros.rclpy_api", reason="needs rclpy (the ros extra)")
 
 import smach
 from plan_bridge.pddl.task import ActionSchema, Parameter
