@@ -34,6 +34,8 @@ def summary_lines(outcome: str | None, report: Any, faults: int | None) -> list[
     """The summary of a run: the outcome, then a few indented lines (actions,
     recovery, time, and the reason when the goal was not reached)."""
     reached = "goal reached" if report.goal_reached else "goal NOT reached"
+    if getattr(report, "orders", None):
+        reached = "every order done" if report.goal_reached else "NOT every order done"
     actions = f"  actions: {report.actions_executed} run, {report.actions_failed} failed" + (
         f"; {_count(faults, 'fault', 'faults')} injected" if faults is not None else ""
     )
@@ -68,9 +70,48 @@ def summary_lines(outcome: str | None, report: Any, faults: int | None) -> list[
         f"  time: planning {report.planning_time_s:.2f} s ({calls}{reused}), "
         f"execution {report.execution_time_s:.2f} s, total {report.total_time_s:.2f} s",
     ]
+    orders = getattr(report, "orders", None)
+    if orders:
+        lines.insert(1, _orders_line(orders))
     if not report.goal_reached:
         lines.append(f"  reason: {report.explanation}")
     return lines
+
+
+def _order_line(event: Any) -> str:
+    """``[order] soda-1 queued at 12.0 s: (At soda0 counter0_left)`` and the like."""
+    status = event.status
+    head = f"[order] {event.order} {status} at {event.at:.1f} s"
+    if status == "queued":
+        return f"{head}: {event.goal}"
+    if status in ("assigned", "active"):
+        return f"{head} ({', '.join(event.robots) or 'no robot'})"
+    if status in ("failed", "refused", "cancelled") or event.reason:
+        return f"{head}: {event.reason}" if event.reason else head
+    return head
+
+
+def _orders_line(orders: dict[str, Any]) -> str:
+    """The summary's line of a mission of orders."""
+    counted = [
+        f"{orders[status]} {status}"
+        for status in ("done", "failed", "refused", "cancelled", "queued", "assigned", "active")
+        if orders.get(status)
+    ]
+    text = f"  orders: {orders.get('orders', 0)} arrived" + (
+        f" ({', '.join(counted)})" if counted else ""
+    )
+    if orders.get("not_arrived"):
+        text += f", {orders['not_arrived']} not arrived"
+    if orders.get("late"):
+        text += f"; {orders['late']} late"
+    if orders.get("latency_p50_s") is not None:
+        text += (
+            f"; latency p50 {orders['latency_p50_s']:.1f} s, p95 {orders['latency_p95_s']:.1f} s"
+        )
+    if orders.get("orders_per_hour") is not None:
+        text += f"; {orders['orders_per_hour']:.1f} done per hour"
+    return text
 
 
 def summary_text(outcome: str | None, report: Any, faults: int | None) -> str:
@@ -166,6 +207,8 @@ class ProgressPrinter:
         if isinstance(event, ExecutiveDecision):
             self._executive = event.path
             return self._release(everything=True) + self._decision(event)
+        if event.kind == "order":
+            return [_order_line(event)]
         if isinstance(event, (ContainerTerminated, ErrorRaised)) and event.path == self._executive:
             # The mission ended: whatever is still held, and the failed steps a
             # replan that gave no plan was about.

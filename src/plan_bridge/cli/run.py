@@ -97,6 +97,20 @@ def _configure_run(parser: argparse.ArgumentParser) -> None:
         help="with a pyrobosim world: changes of the world at simulated times (a hallway "
         "closed, an object moved; see docs/sim.md)",
     )
+    orders = parser.add_argument_group("orders over time", "see docs/orders.md")
+    orders.add_argument(
+        "--orders",
+        metavar="ORDERS.yaml",
+        help="serve the orders of ORDERS.yaml as they arrive (simulated seconds; Poisson "
+        "streams drawn from --seed) instead of the target's goal; the run ends when every "
+        "order is done, failed, refused or cancelled",
+    )
+    orders.add_argument(
+        "--orders-open",
+        action="store_true",
+        help="also take orders sent while the mission runs (plan-bridge control URL order "
+        "GOAL, the viewer, ROS 2); the run goes on until stopped",
+    )
     parser.add_argument(
         "--snapshot",
         metavar="FILE.svg|.png",
@@ -202,6 +216,9 @@ RESUMABLE = (
     "timeout",
     "concurrent",
 )
+#: Run options a resume takes from the journal when it has them (journals written
+#: before they were recorded lack them: then they are off).
+RESUMED_IF_RECORDED = ("orders", "orders_open")
 #: Run options a resume takes from the journal unless given again (journals written
 #: before they were recorded lack them).
 RESUMED_UNLESS_GIVEN = ("time_scale",)
@@ -239,6 +256,9 @@ def _resume_arguments(
         setattr(args, key, run[key])
     for key in RESUMED_UNLESS_GIVEN:
         if getattr(args, key) is None and run.get(key) is not None:
+            setattr(args, key, run[key])
+    for key in RESUMED_IF_RECORDED:
+        if key in run:
             setattr(args, key, run[key])
     for key in RESUMED_WORLD:
         setattr(args, key, run.get(key))
@@ -444,6 +464,8 @@ def _start_mission(args: argparse.Namespace, target: Target, resources: Any) -> 
         planner_timeout=args.timeout,
         concurrent=args.concurrent,
         time_scale=default_scale if args.time_scale is None else args.time_scale,
+        orders=args.orders,
+        orders_open=args.orders_open,
     )
     fail_rate = options.fail_rate_for(target)
     skills_text = "domain skills" if target.has_own_skills else "symbolic skills"
@@ -486,7 +508,9 @@ def _open_journal(
     journal_path = args.resume or args.journal
     if not journal_path:
         return None
-    run_options = {key: getattr(args, key) for key in (*RESUMABLE, *RESUMED_UNLESS_GIVEN)}
+    run_options = {
+        key: getattr(args, key) for key in (*RESUMABLE, *RESUMED_UNLESS_GIVEN, *RESUMED_IF_RECORDED)
+    }
     run_options.update(
         target=str(args.target), problem=str(target.problem_path), fail_rate=mission.fail_rate
     )

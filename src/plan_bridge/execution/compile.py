@@ -15,6 +15,7 @@ actions of several robots run at the same time.
 from __future__ import annotations
 
 import re
+import threading
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -46,6 +47,7 @@ from smach.introspection.events import Event, stamp
 __all__ = [
     "CompiledPlan",
     "PlanContainer",
+    "PlanHold",
     "StepOptions",
     "StepRecord",
     "StepState",
@@ -76,6 +78,56 @@ class StepRecord:
     observing, the world is sensed around it before any replan."""
 
 
+class PlanHold:
+    """When a plan in force stops starting steps while its running steps finish.
+
+    Held on :meth:`request` (from any thread), or once the run's clock reaches the time
+    :attr:`alarm` gives (an order due to arrive). A held plan ends ``preempted`` with its
+    unstarted steps not run; the executive then takes what asked for the hold (new
+    orders, a cancel) and plans again. Unlike a preempt, no running step is stopped:
+    a robot in the middle of a drive completes it.
+    """
+
+    def __init__(self) -> None:
+        self._requested = threading.Event()
+        self._lock = threading.Lock()
+        self._pokes: list[Callable[[], None]] = []
+        #: The clock time at which the plan holds (None: not before a request).
+        self.alarm: Callable[[], float | None] | None = None
+
+    def request(self) -> None:
+        """Hold the plan in force (and the next one, until :meth:`clear`)."""
+        self._requested.set()
+        with self._lock:
+            pokes = list(self._pokes)
+        for poke in pokes:
+            poke()
+
+    def clear(self) -> None:
+        self._requested.clear()
+
+    def due(self) -> float | None:
+        """The clock time of the alarm, if any."""
+        return None if self.alarm is None else self.alarm()
+
+    def held(self, now: float) -> bool:
+        """Whether the plan holds at clock time ``now``."""
+        if self._requested.is_set():
+            return True
+        due = self.due()
+        return due is not None and due <= now + 1e-9
+
+    def watch(self, poke: Callable[[], None]) -> None:
+        """Call ``poke()`` on every :meth:`request` (a dispatcher waiting to start steps)."""
+        with self._lock:
+            self._pokes.append(poke)
+
+    def unwatch(self, poke: Callable[[], None]) -> None:
+        with self._lock:
+            if poke in self._pokes:
+                self._pokes.remove(poke)
+
+
 def step_label(index: int, step: PlanStep, width: int = 2) -> str:
     """``03_PICK_CUP_TABLE``: readable, unique within a plan, safe in state paths."""
     words = [step.action, *step.arguments]
@@ -100,6 +152,8 @@ class StepState(smach.Wrapper):
         check_preconditions: bool = True,
         on_finished: Callable[[StepRecord], None] | None = None,
         world: World | None = None,
+        on_started: Callable[[int, PlanStep], None] | None = None,
+        hold: PlanHold | None = None,
     ) -> None:
         super().__init__(outcomes=list(STEP_OUTCOMES), input_keys=[], output_keys=[])
         self.index = index
@@ -110,6 +164,10 @@ class StepState(smach.Wrapper):
         self.world = world
         self.check_preconditions = check_preconditions
         self.on_finished = on_finished
+        #: Called with the step's index and action when its skill is about to start.
+        self.on_started = on_started
+        #: The plan's hold: a sequential step held does not start (:class:`PlanHold`).
+        self.hold = hold
         self.record = StepRecord(index, ground.step)
 
     def add(
@@ -149,6 +207,8 @@ class StepState(smach.Wrapper):
     def run(self, child: smach.State, label: str) -> str:
         record = StepRecord(self.index, self.ground.step)
         self.record = record
+        if self.hold is not None and self.hold.held(clock_of(self.world).now()):
+            return "preempted"  # not started: no record, the plan holds here
         started = time.monotonic()
         with self.belief.locked() as facts:
             if self.check_preconditions and not self.ground.applicable(facts):
@@ -158,6 +218,7 @@ class StepState(smach.Wrapper):
             # Effects are those of the state the step starts in (conditional effects
             # read it), applied only if the skill succeeds.
             adds, dels = self.ground.effects(facts)
+        self._started()
         self._give_step_keys()
         outcome, observations = self._skill_result(record, self.run_child(), label)
         if outcome == "succeeded":
@@ -166,6 +227,11 @@ class StepState(smach.Wrapper):
         self._observe(record, observations)
         record.outcome = outcome
         return self._finish(record, started)
+
+    def _started(self) -> None:
+        """The step's conditions held: its skill starts now."""
+        if self.on_started is not None:
+            self.on_started(self.index, self.ground.step)
 
     def _give_step_keys(self) -> smach.UserData:
         """Put the step's keys in its userdata for the skill (none of its observations
@@ -276,6 +342,8 @@ def compile_plan(
     time_scale: float = 0.0,
     on_failure: str = "finish",
     world: World | None = None,
+    on_started: Callable[[int, PlanStep], None] | None = None,
+    hold: PlanHold | None = None,
 ) -> CompiledPlan:
     """Build the SMACH machine that executes ``steps`` (numbered from ``first_index``);
     ``variants`` maps a position in ``steps`` to the skill variant it runs; ``world``
@@ -285,6 +353,9 @@ def compile_plan(
     :class:`~plan_bridge.execution.temporal.TemporalDispatch` (``time_scale``: wall
     seconds per plan second; ``on_failure``: ``finish`` or ``preempt`` the steps still
     running when one fails); ``concurrent`` does not apply to it.
+
+    ``on_started(index, step)`` is called when a step's skill starts; ``hold`` stops the
+    plan from starting steps (:class:`PlanHold`).
     """
     steps = list(steps)
     options: StepOptions = {
@@ -293,6 +364,8 @@ def compile_plan(
         "on_finished": on_finished,
         "variants": variants,
         "world": world,
+        "on_started": on_started,
+        "hold": hold,
     }
     if is_temporal(steps):
         from plan_bridge.execution.temporal import compile_temporal
@@ -346,6 +419,8 @@ class StepOptions(TypedDict, total=False):
     on_finished: Callable[[StepRecord], None] | None
     variants: Mapping[int, str] | None
     world: World | None
+    on_started: Callable[[int, PlanStep], None] | None
+    hold: PlanHold | None
 
 
 def build_steps(
@@ -360,6 +435,8 @@ def build_steps(
     on_finished: Callable[[StepRecord], None] | None = None,
     variants: Mapping[int, str] | None = None,
     world: World | None = None,
+    on_started: Callable[[int, PlanStep], None] | None = None,
+    hold: PlanHold | None = None,
 ) -> tuple[list[str], list[S]]:
     """The labels and the step states (of ``state_class``, each around its skill) of a
     plan whose first step is numbered ``first_index``; ``variants`` maps a position in
@@ -377,6 +454,8 @@ def build_steps(
             check_preconditions=check_preconditions,
             on_finished=on_finished,
             world=world,
+            on_started=on_started,
+            hold=hold,
         )
         state.add("SKILL", skill_state)
         states.append(state)

@@ -28,6 +28,7 @@ from plan_bridge.errors import FactError, PlanBridgeError
 from plan_bridge.execution.compile import (
     CompiledPlan,
     PlanContainer,
+    PlanHold,
     StepRecord,
     StepState,
     compile_plan,
@@ -159,6 +160,9 @@ class Executive(PlanContainer):
         self._recovery: Recovery | None = None
         self._records: dict[int, StepRecord] = {}
         self._in_mission = False  # between the start and the end of run_children
+        #: Stops the plan in force from starting steps, its running steps finishing
+        #: (:class:`~plan_bridge.execution.compile.PlanHold`; what orders use).
+        self.hold = PlanHold()
         #: The knowledge base the mission follows (None: the task's problem).
         self.knowledge: KnowledgeBase | None = None
         self._link: KnowledgeLink | None = None
@@ -235,46 +239,14 @@ class Executive(PlanContainer):
         resume, self._resume = self._resume, None
         if resume is not None:
             plan, self._next_label = self._restore(resume)
-        news = self._take_knowledge()
-        if news:
-            self.decide("knowledge", f"planning for the knowledge base's problem ({news})")
-        replanner = self._replanner
-        if (
-            replanner is None
-            or replanner.planner is not self.planner
-            or replanner.policy is not self.policy
-            or replanner.cache is not self.plan_cache
-        ):
-            # Kept between runs: its replan portfolio is built once.
-            replanner = self._replanner = Replanner(
-                self.task,
-                self.planner,
-                self.policy,
-                self.model,
-                self.belief,
-                self.plan_cache,
-                self.preempt_event,
-                self._plan_computed,
-                projected=self.task_view is not None,
-            )
-        replanner.start(self.report)
-        recovery = self._recovery = Recovery(
-            self.model,
-            self.policy,
-            self.belief,
-            replanner,
-            self.report,
-            self.decide,
-            self.skills,
-            self.recovery_ladder,
-        )
+        recovery = self._begin_mission()
         self._sense()
         if self.model.goal_holds(self.belief.facts):
             self.decide("done", "the goal already holds")
             return "succeeded"
         self._retask()
         if resume is None:
-            initial = replanner.plan("initial plan")
+            initial = recovery.replanner.plan("initial plan")
             if not initial.solved:
                 raise MissionEnded(
                     "aborted", f"no plan ({initial.status.value}): {initial.explanation}"
@@ -324,6 +296,43 @@ class Executive(PlanContainer):
             self._retask()
             plan = recovery.recover(rest, reason, record)
 
+    def _begin_mission(self) -> Recovery:
+        """Take the knowledge base's news, and make the replanner and the recovery of
+        this run (the replanner is kept between runs: its portfolio is built once)."""
+        news = self._take_knowledge()
+        if news:
+            self.decide("knowledge", f"planning for the knowledge base's problem ({news})")
+        replanner = self._replanner
+        if (
+            replanner is None
+            or replanner.planner is not self.planner
+            or replanner.policy is not self.policy
+            or replanner.cache is not self.plan_cache
+        ):
+            replanner = self._replanner = Replanner(
+                self.task,
+                self.planner,
+                self.policy,
+                self.model,
+                self.belief,
+                self.plan_cache,
+                self.preempt_event,
+                self._plan_computed,
+                projected=self.task_view is not None,
+            )
+        replanner.start(self.report)
+        recovery = self._recovery = Recovery(
+            self.model,
+            self.policy,
+            self.belief,
+            replanner,
+            self.report,
+            self.decide,
+            self.skills,
+            self.recovery_ladder,
+        )
+        return recovery
+
     def _run_plan(self, plan: list[PlanStep], first_index: int) -> tuple[str, int | None]:
         """Run ``plan``; return (outcome, index in ``plan`` of the first unfinished step)."""
         compiled = compile_plan(
@@ -339,6 +348,8 @@ class Executive(PlanContainer):
             on_failure=self.on_failure,
             variants=self._recovery.variants_of(plan) if self._recovery is not None else None,
             world=self.world,
+            on_started=self._step_started,
+            hold=self.hold,
         )
         self._compiled = compiled
         if isinstance(compiled.machine, TemporalDispatch):
@@ -376,6 +387,9 @@ class Executive(PlanContainer):
     def _succeeded(self, index: int) -> bool:
         record = self._records.get(index)
         return record is not None and record.outcome == "succeeded"
+
+    def _step_started(self, index: int, step: PlanStep) -> None:
+        """Step ``index`` (``step``) of the plan in force starts (in its thread)."""
 
     def _step_finished(self, record: StepRecord) -> None:
         with self._checkpoint_lock:

@@ -142,9 +142,13 @@ class ExecutionReport:
     executed: list[str] = field(default_factory=list)
     decisions: list[dict[str, str]] = field(default_factory=list)
     explanation: str = ""
+    orders: dict[str, Any] = field(default_factory=dict)
+    """A mission of orders: counts by status, latency, throughput (empty otherwise)."""
 
     def to_json(self) -> dict[str, Any]:
         data = dataclasses.asdict(self)
+        if not self.orders:
+            del data["orders"]
         for key in ("planning_time_s", "execution_time_s", "total_time_s"):
             data[key] = round(data[key], 4)
         return data

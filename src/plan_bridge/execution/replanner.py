@@ -73,6 +73,7 @@ class Replanner:
         self.report = ExecutionReport()
         #: Plans that replaced the plan in force, after the first one.
         self.budgeted_calls = 0
+        self._window_start_s = 0.0
         self._replan_planner: Planner | None = None
         # Replans of this execution that gave no plan, by (state, goal): asking again
         # from the same state would only wait for the same time-out.
@@ -104,8 +105,15 @@ class Replanner:
     def start(self, report: ExecutionReport) -> None:
         """Begin an execution that reports into ``report``."""
         self.report = report
+        self.new_window()
+
+    def new_window(self) -> None:
+        """Give the budgets (replans, planning time) afresh from now, and forget which
+        states gave no plan: a mission of many goals (orders) budgets each goal's
+        plans, not the whole run's."""
         self.budgeted_calls = 0
         self._no_plan = {}
+        self._window_start_s = self.report.planning_time_s
 
     def plan(
         self,
@@ -148,7 +156,7 @@ class Replanner:
             )
             self.on_plan(f"{reason} (no plan from this state before)", result)
             return result
-        remaining = policy.planning_time_budget - report.planning_time_s
+        remaining = policy.planning_time_budget - (report.planning_time_s - self._window_start_s)
         if remaining <= 0:
             raise MissionEnded(
                 "aborted", f"planning time budget ({policy.planning_time_budget} s) exhausted"

@@ -75,6 +75,7 @@ from plan_bridge.execution.compile import (
     STEP_OUTCOMES,
     CompiledPlan,
     PlanContainer,
+    PlanHold,
     StepOptions,
     build_steps,
 )
@@ -171,6 +172,7 @@ class TemporalDispatch(PlanContainer):
         time_scale: float = 0.0,
         on_failure: str = "finish",
         clock: Clock | None = None,
+        hold: PlanHold | None = None,
     ) -> None:
         if on_failure not in POLICIES:
             raise ValueError(f"on_failure must be one of {', '.join(POLICIES)}, got {on_failure!r}")
@@ -185,6 +187,8 @@ class TemporalDispatch(PlanContainer):
         self.time_scale = time_scale
         self.on_failure = on_failure
         self.clock = WALL_CLOCK if clock is None else clock
+        #: Stops new starts while the running steps finish (:class:`PlanHold`).
+        self.hold = hold
         #: Clock seconds per plan second: 1 on a simulated clock, else ``time_scale``.
         self.clock_per_plan_s = 1.0 if self.clock.simulated else time_scale
         origin = min((s.start or 0.0 for s in self.steps), default=0.0)
@@ -324,9 +328,13 @@ class TemporalDispatch(PlanContainer):
             )
         self._run_state = run
         self.belief.add_listener(self._poke)
+        if self.hold is not None:
+            self.hold.watch(self._poke)
         try:
             self._loop(run)
         finally:
+            if self.hold is not None:
+                self.hold.unwatch(self._poke)
             self.belief.remove_listener(self._poke)
             self._run_state = None
         if run.errors:
@@ -370,9 +378,15 @@ class TemporalDispatch(PlanContainer):
             self._wake.notify_all()
 
     def _loop(self, run: _Dispatch) -> None:
+        hold = self.hold
         with self._wake:
             while True:
-                stopping = run.failure is not None or self.preempt_requested() or run.errors
+                stopping = (
+                    run.failure is not None
+                    or self.preempt_requested()
+                    or bool(run.errors)
+                    or (hold is not None and hold.held(self.clock.now()))
+                )
                 due: float | None = None
                 if not stopping:
                     due = self._start_ready(run)
@@ -388,6 +402,9 @@ class TemporalDispatch(PlanContainer):
                         run.failure = "aborted"
                         return
                     continue
+                alarm = None if stopping or hold is None else hold.due()
+                if alarm is not None:  # an order due: the dispatcher looks then
+                    due = alarm if due is None else min(alarm, due)
                 self._wake.wait_until(due)
 
     def _ready_at(self, run: _Dispatch, j: int) -> float | None:
@@ -522,6 +539,7 @@ def compile_temporal(
         time_scale=time_scale,
         on_failure=on_failure,
         clock=clock_of(options.get("world")) if clock is None else clock,
+        hold=options.get("hold"),
     )
     return CompiledPlan(
         dispatch,

@@ -26,11 +26,12 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import smach
-from plan_bridge.execution.compile import StepRecord, StepState
+from plan_bridge.execution.compile import PlanHold, StepRecord, StepState
 from plan_bridge.execution.semantics import GroundAction
 from plan_bridge.execution.timeline import ActionEnded, ActionStarted, Timing
 from plan_bridge.execution.world import World, WorldState
 from plan_bridge.pddl.task import Fact
+from plan_bridge.planning.types import PlanStep
 from plan_bridge.skills.registry import STEP_KEYS, Skill
 
 __all__ = [
@@ -92,6 +93,8 @@ class TimedStepState(StepState):
         check_preconditions: bool = True,
         on_finished: Callable[[StepRecord], None] | None = None,
         world: World | None = None,
+        on_started: Callable[[int, PlanStep], None] | None = None,
+        hold: PlanHold | None = None,
         hooks: StepHooks | None = None,
     ) -> None:
         super().__init__(
@@ -102,6 +105,8 @@ class TimedStepState(StepState):
             check_preconditions=check_preconditions,
             on_finished=on_finished,
             world=world,
+            on_started=on_started,
+            hold=hold,  # (unused: the dispatcher holds a temporal plan, not its steps)
         )
         step = ground.step
         self.timing = Timing(step.start or 0.0, step.duration or 0.0)
@@ -240,6 +245,7 @@ class TimedStepState(StepState):
         return check
 
     def _started(self) -> None:
+        super()._started()
         timing = self.timing
         timing.actual_start = self.hooks.elapsed()
         timing.actual_end = None

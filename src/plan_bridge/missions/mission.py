@@ -30,7 +30,7 @@ import smach
 from plan_bridge.errors import PlanBridgeError
 from plan_bridge.execution.simulation import SimulatedWorld, symbolic_skills
 from plan_bridge.execution.timed_world import TimedWorld, timed_skills
-from plan_bridge.pddl.task import PlanningTask, load_task
+from plan_bridge.pddl.task import Fact, PlanningTask, load_task
 from plan_bridge.skills.registry import SkillRegistry
 
 if TYPE_CHECKING:
@@ -144,6 +144,20 @@ class Target:
     def figures(self) -> dict[str, Any]:
         """What loading the target took, for a run's report (none here)."""
         return {}
+
+    def read_order_goal(self, text: str) -> list[Fact]:
+        """An order's goal (atoms such as ``(at r1 lab) (holding r1 cup)``) as atoms of
+        the task, checked; raises :class:`~plan_bridge.errors.PlanBridgeError` saying
+        what is wrong (an unknown name, a wrong arity or type)."""
+        from plan_bridge.execution.control import parse_goal
+
+        text = text.strip()
+        if text.startswith("(and ") or text.startswith("(and("):
+            text = text[text.index("and") + 3 : text.rindex(")")]
+        atoms = [self.task.check_fact(fact) for fact in parse_goal(text)]
+        if not atoms:
+            raise TargetError(f"goal {text!r}: no atoms; an order's goal is atoms like (at r1 lab)")
+        return atoms
 
     def setup(self, *, seed: int, fail_rate: float, variant: str = "") -> MissionSetup:
         """Skills and world for one run: the domain's ``setup()`` (or symbolic skills),

@@ -61,6 +61,12 @@ class MissionOptions:
     """Wall seconds per simulated second of a simulated world (0: as fast as it goes)."""
     variant: str = ""
     """A variant of the domain's world (``plan-bridge study --variant``)."""
+    orders: str | None = None
+    """An orders file (:mod:`plan_bridge.orders.order_file`): the mission serves its
+    orders as they arrive, instead of the target's goal."""
+    orders_open: bool = False
+    """Take live orders too (control API, viewer, ROS 2) until stopped; without an
+    orders file, the mission waits for them."""
 
     def fail_rate_for(self, target: Target) -> float:
         """:attr:`fail_rate`, or its default for ``target`` when none was given."""
@@ -237,16 +243,31 @@ def prepare_mission(
     chosen = planner if planner is not None else get_planner(options.planner)
     if setup.planner_for is not None:
         chosen = setup.planner_for(chosen)
-    executive = Executive(
-        target.task,
-        setup.skills,
-        chosen,
-        world=setup.world,
-        policy=policy,
-        sense=setup.sense,
-        concurrent=setup.concurrent or options.concurrent,
-        task_view=setup.task_view,
-    )
+    settings: dict[str, Any] = {
+        "world": setup.world,
+        "policy": policy,
+        "sense": setup.sense,
+        "concurrent": setup.concurrent or options.concurrent,
+        "task_view": setup.task_view,
+    }
+    executive: Executive
+    if options.orders is not None or options.orders_open:
+        from plan_bridge.orders.book import OrderBook
+        from plan_bridge.orders.order_executive import OrderExecutive
+        from plan_bridge.orders.order_file import load_orders
+
+        scheduled = load_orders(options.orders).draw(options.seed) if options.orders else []
+        book = OrderBook(scheduled, closed=not options.orders_open)
+        executive = OrderExecutive(
+            target.task,
+            setup.skills,
+            chosen,
+            orders=book,
+            goal_of=target.read_order_goal,
+            **settings,
+        )
+    else:
+        executive = Executive(target.task, setup.skills, chosen, **settings)
     world = executive.world
     if world is not None:
         world.time_scale = options.time_scale

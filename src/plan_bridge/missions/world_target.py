@@ -29,7 +29,7 @@ from plan_bridge.errors import PlanBridgeError
 from plan_bridge.fleet.planner import FleetPlanner
 from plan_bridge.missions.mission import MissionSetup, Target, TargetError, load_domain_module
 from plan_bridge.pddl.constructs import did_you_mean
-from plan_bridge.pddl.task import PlanningTask
+from plan_bridge.pddl.task import Fact, PlanningTask
 from plan_bridge.robosim.events import WorldEvent, check_events, load_events
 from plan_bridge.robosim.target_files import read_goals
 
@@ -110,6 +110,19 @@ class WorldTarget(Target):
     def figures(self) -> dict[str, Any]:
         """pyrobosim's load of the world file, and ours: its map and first task."""
         return {"world_load_s": round(self.load_s, 3), "task_s": round(self.task_s, 3)}
+
+    def read_order_goal(self, text: str) -> list[Fact]:
+        """An order's goal: a goal's name of the folder's goals.yaml, or atoms in
+        pyrobosim's vocabulary (:func:`~plan_bridge.maps.goals.parse_goal`)."""
+        from plan_bridge.maps.goals import parse_goal
+
+        word = text.strip()
+        if _GOAL_NAME.match(word):
+            goals = read_goals(self.folder) if self.folder is not None else {}
+            text = _named_goal(word, self.folder, goals)
+        if self.view is None:
+            raise TargetError(f"{self.world_file}: the world's map was not read")
+        return parse_goal(text, self.view.model)
 
 
 def variant_events(folder: Path, variant: str) -> list[WorldEvent]:
@@ -236,6 +249,18 @@ def _robots_in(world_file: Path) -> int:
     return len(robots) if isinstance(robots, list) else 0
 
 
+def _named_goal(word: str, folder: Path | None, goals: dict[str, str], said: str = "") -> str:
+    """The atoms of the goal named ``word`` (raises :class:`TargetError` naming the
+    goals there are)."""
+    if word in goals:
+        return goals[word]
+    known = f"; goals of {folder}/goals.yaml: {', '.join(goals)}" if goals else ""
+    raise TargetError(
+        f"{said}{word}: not a goal atom such as (At apple0 table0_tabletop), nor the name of "
+        f"a goal{did_you_mean(word, goals)}{known}"
+    )
+
+
 def _goal_of(
     target: Path,
     world_file: Path,
@@ -249,13 +274,7 @@ def _goal_of(
     name = str(problem) if problem is not None and Path(problem) != world_file else ""
     if goal is not None and _GOAL_NAME.match(goal.strip()):
         word = goal.strip()
-        if word in goals:
-            return word, goals[word]
-        known = f"; goals of {folder}/goals.yaml: {', '.join(goals)}" if goals else ""
-        raise TargetError(
-            f"--goal {word}: not a goal atom such as (At apple0 table0_tabletop), nor the "
-            f"name of a goal{did_you_mean(word, goals)}{known}"
-        )
+        return word, _named_goal(word, folder, goals, "--goal ")
     if goal is not None:
         return Path(name).name if name else "", goal
     if not goals:

@@ -23,8 +23,6 @@ Python. The world applies an event when its clock passes ``at`` (see docs/sim.md
 
 from __future__ import annotations
 
-import math
-import random
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -32,6 +30,7 @@ from typing import Any
 
 from plan_bridge.errors import PlanBridgeError
 from plan_bridge.pddl.constructs import did_you_mean
+from plan_bridge.seeded_time import draw_time, read_time
 
 __all__ = ["KINDS", "EventError", "WorldEvent", "check_events", "load_events", "parse_events"]
 
@@ -67,9 +66,7 @@ class WorldEvent:
         uniformly in it (the same for every event of that window and seed)."""
         if self.window is None:
             return self
-        low, high = self.window
-        at = round(random.Random(f"world-event:{seed}:{low!r}:{high!r}").uniform(low, high), 3)
-        return replace(self, at=at, window=None)
+        return replace(self, at=draw_time(self.window, seed, "world-event"), window=None)
 
     def describe(self) -> str:
         where = f" to {self.to}" if self.to else ""
@@ -147,29 +144,12 @@ def _event(item: Any, where: str) -> WorldEvent:
     return WorldEvent(at, kind, target, to, where, window)
 
 
-def _seconds(value: Any) -> bool:
-    return (
-        not isinstance(value, bool)
-        and isinstance(value, (int, float))
-        and math.isfinite(value)
-        and value >= 0
-    )
-
-
 def _time(at: Any, where: str) -> tuple[float, tuple[float, float] | None]:
     """``at:`` as (seconds, window): a number, or a window ``[LO, HI]``."""
-    if _seconds(at):
-        return float(at), None
-    if isinstance(at, list) and len(at) == 2 and all(_seconds(v) for v in at):
-        low, high = float(at[0]), float(at[1])
-        if low > high:
-            raise EventError(
-                f"{where}: at: [{at[0]}, {at[1]}]: the window's start is after its end"
-            )
-        return low, (low, high)
-    raise EventError(
-        f"{where}: at: must be seconds >= 0 or a window [LO, HI] of them, got {at!r}; {_ALLOWED}"
-    )
+    time = read_time(at)
+    if isinstance(time, str):
+        raise EventError(f"{where}: {time}; {_ALLOWED}")
+    return time
 
 
 def check_events(
