@@ -45,6 +45,7 @@ from plan_bridge.execution.replanner import MissionEnded
 from plan_bridge.orders.assignment import agents_of, order_work
 from plan_bridge.orders.book import OrderBook, OrderBookError
 from plan_bridge.orders.order import OrderChanged, OrderState, OrderStatus
+from plan_bridge.orders.requests import OrderDesk
 from plan_bridge.pddl.task import Fact, PlanningTask, format_fact
 from plan_bridge.planning.types import PlanStep
 
@@ -121,6 +122,10 @@ class OrderExecutive(Executive):
         """The mission's clock: seconds since the mission began (simulated seconds in a
         simulated world)."""
         return clock_of(self.world).now() - self._t0
+
+    def desk(self) -> OrderDesk:
+        """Order requests for this mission (control API, viewer, ROS 2)."""
+        return OrderDesk(self.orders, self.now)
 
     def _alarm(self) -> float | None:
         at = self.orders.next_arrival()
