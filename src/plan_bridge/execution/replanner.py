@@ -22,7 +22,7 @@ from plan_bridge.execution.plan_cache import PlanCache
 from plan_bridge.execution.policy import ExecutionReport, ReplanPolicy
 from plan_bridge.execution.semantics import ActionModel
 from plan_bridge.execution.task_view import project
-from plan_bridge.execution.world import WorldState
+from plan_bridge.execution.world import FactSnapshot, WorldState
 from plan_bridge.pddl.task import Fact, PlanningTask
 from plan_bridge.planning.engines import WARM, AutoPlanner
 from plan_bridge.planning.planner import UPPlanner
@@ -73,6 +73,9 @@ class Replanner:
         self.report = ExecutionReport()
         #: Plans that replaced the plan in force, after the first one.
         self.budgeted_calls = 0
+        #: Narrows what the planner is told of the belief (an order mission leaves out
+        #: a robot it benched); None: the belief (projected) as it is.
+        self.restrict: Callable[[FactSnapshot], FactSnapshot] | None = None
         self._window_start_s = 0.0
         self._replan_planner: Planner | None = None
         # Replans of this execution that gave no plan, by (state, goal): asking again
@@ -137,6 +140,8 @@ class Replanner:
                 f"replanning budget exhausted ({policy.max_replans} replans) after: {reason}",
             )
         facts = project(self.belief.facts, self.task) if self.projected else self.belief.facts
+        if self.restrict is not None:
+            facts = self.restrict(facts)
         if policy.reuse_plans:
             reused = self._reuse(facts, goal)
             if reused is not None:

@@ -107,7 +107,12 @@ class FleetPlanner:
         closed = self.view.closed_for(task)
         if closed is None:
             closed = self.view.closed_halls(facts)
-        robots = [r for r in self.view.robots() if r in task.objects]
+        # A robot the belief given puts nowhere (left out by the caller) gets no job.
+        robots = [
+            r
+            for r in self.view.robots()
+            if r in task.objects and self.view.robot_place(facts, r) is not None
+        ]
         jobs = jobs_of(atoms, robots, facts, self.view)
         if len(robots) < 2 or not jobs:
             return self._solve_one(task, facts, atoms, timeout, cancel)

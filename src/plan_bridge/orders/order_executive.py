@@ -42,6 +42,7 @@ from plan_bridge.execution.control import task_with_goal
 from plan_bridge.execution.executive import Executive
 from plan_bridge.execution.repair import Recovery
 from plan_bridge.execution.replanner import MissionEnded
+from plan_bridge.execution.world import FactSnapshot, values_of
 from plan_bridge.orders.assignment import agents_of, order_work
 from plan_bridge.orders.book import OrderBook, OrderBookError
 from plan_bridge.orders.order import OrderChanged, OrderState, OrderStatus
@@ -49,13 +50,16 @@ from plan_bridge.orders.requests import OrderDesk
 from plan_bridge.pddl.task import Fact, PlanningTask, format_fact
 from plan_bridge.planning.types import PlanStep
 
-__all__ = ["DEFAULT_ATTEMPTS", "DEFAULT_PER_ROBOT", "GoalReader", "OrderExecutive"]
+__all__ = ["BENCH_S", "DEFAULT_ATTEMPTS", "DEFAULT_PER_ROBOT", "GoalReader", "OrderExecutive"]
 
 #: Orders planned at once per robot (the horizon): enough to chain a robot's work,
 #: few enough that a plan stays a task's size however long the queue.
 DEFAULT_PER_ROBOT = 2
 #: Plans given up for one order (its robots' recovery exhausted) before it fails.
 DEFAULT_ATTEMPTS = 2
+#: Seconds (mission clock) a robot whose step failed past recovery is left out of
+#: plans, so that another robot takes its orders over.
+BENCH_S = 300.0
 
 GoalReader = Callable[[str], Sequence[Fact]]
 """Reads an order's goal (atoms or a goal's name, in the target's words) into atoms
@@ -106,6 +110,9 @@ class OrderExecutive(Executive):
         self._in_steps: dict[int, tuple[tuple[str, ...], float]] = {}
         self.elapsed_s = 0.0
         """The mission's clock at its end (seconds since it began)."""
+        self.benched: dict[str, float] = {}
+        """Robots left out of plans (the planner is told nothing of them) until a time
+        of the mission's clock: their step failed past recovery."""
         orders.add_waker(self._wake)
         orders.add_listener(self._order_changed)
         self.hold.alarm = self._alarm
@@ -140,7 +147,9 @@ class OrderExecutive(Executive):
     def _mission(self) -> str:
         self._t0 = clock_of(self.world).now()
         self.busy_s = {}
+        self.benched = {}
         recovery = self._begin_mission()
+        recovery.replanner.restrict = self._without_benched
         self._sense()
         plan: list[PlanStep] = []
         self._planned_for = ()
@@ -219,6 +228,8 @@ class OrderExecutive(Executive):
                 raise
             culprits = self._serving(first + failed) if failed is not None else ()
             self._give_up(culprits or self._planned_for, ended.explanation)
+            if failed is not None:
+                self._bench([a for a in plan[failed].arguments if a in self.robots])
             return []
 
     def _replan_or_give_up(self, horizon: Sequence[OrderState], reason: str, **how: Any) -> Any:
@@ -356,7 +367,10 @@ class OrderExecutive(Executive):
         serves: dict[int, list[str]] = {}
         now = self.now()
         for order_id, done_by in work.items():
-            self.orders.assign(order_id, done_by.robots, now)
+            try:
+                self.orders.assign(order_id, done_by.robots, now)
+            except OrderBookError:
+                continue  # cancelled meanwhile (from another thread)
             for position in done_by.steps:
                 serves.setdefault(first + position, []).append(order_id)
         with self._serves_lock:
@@ -391,6 +405,31 @@ class OrderExecutive(Executive):
         if self._replanner is not None:
             self._replanner.new_window()
         self._planned_for = ()
+
+    # -- robots left out ----------------------------------------------------------------------
+    def _bench(self, robots: Sequence[str]) -> None:
+        """Leave ``robots`` out of plans for :data:`BENCH_S` (unless no robot would be left)."""
+        now = self.now()
+        available = {r for r in self.robots if self.benched.get(r, -1.0) <= now}
+        robots = [r for r in robots if r in available]
+        if not robots or available <= set(robots):
+            return
+        for robot in robots:
+            self.benched[robot] = now + BENCH_S
+        self.decide(
+            "bench",
+            f"{', '.join(robots)} left out of plans until {now + BENCH_S:g} s: its step "
+            f"failed past recovery; the other robots take its orders",
+        )
+
+    def _without_benched(self, facts: FactSnapshot) -> FactSnapshot:
+        """``facts`` without those of the robots benched now."""
+        now = self.now()
+        out = {r for r, until in self.benched.items() if until > now}
+        if not out:
+            return facts
+        kept = [f for f in facts if not any(arg in out for arg in f[1:])]
+        return FactSnapshot(kept, values_of(facts))
 
     # -- steps ------------------------------------------------------------------------------------
     def _step_started(self, index: int, step: PlanStep) -> None:

@@ -5,16 +5,18 @@ from __future__ import annotations
 import threading
 import time
 from pathlib import Path
+from typing import Any
 
 import pytest
 
 import smach
-from plan_bridge.execution.compile import CompiledPlan, StepRecord, compile_plan
+from plan_bridge.execution.compile import CompiledPlan, PlanHold, StepRecord, compile_plan
 from plan_bridge.execution.semantics import ActionModel
 from plan_bridge.execution.temporal import (
     ActionEnded,
     ActionStarted,
     TemporalDispatch,
+    compile_temporal,
     end_precedence,
     precedence,
 )
@@ -393,3 +395,55 @@ def test_a_given_plan_zero_puts_the_steps_on_the_timeline_of_an_earlier_run(
         assert dispatch.execute() == "succeeded"
     assert seen["given"] == pytest.approx(4.01)
     assert seen["none"] == pytest.approx(0.0)
+
+
+def test_a_held_plan_starts_no_step_and_lets_the_running_ones_finish(task: PlanningTask) -> None:
+    hold = PlanHold()
+    model = ActionModel(task)
+    belief = WorldState(task.initial_facts, model.initial_values())
+    skills = skills_with(hold_light=0.3, undock=0.3)
+    compiled = compile_plan(PLAN, skills, model, belief, hold=hold)
+    dispatch = compiled.machine
+    outcome: list[str | None] = []
+    runner = threading.Thread(target=lambda: outcome.append(dispatch.execute()))
+    runner.start()
+    deadline = time.monotonic() + 10
+    while compiled.step_states[0].timing.actual_start is None and time.monotonic() < deadline:
+        time.sleep(0.002)
+    hold.request()  # (an order arrived while the light and the undock run)
+    runner.join(20)
+    assert outcome == ["preempted"]
+    records = {s.ground.name: s.record.outcome for s in compiled.step_states}
+    # Running when held: finished, not stopped; inspect (after the undock) never started.
+    assert records == {"hold-light": "succeeded", "undock": "succeeded", "inspect": ""}
+
+
+def test_a_plan_holds_when_the_clock_reaches_its_alarm(task: PlanningTask) -> None:
+    from plan_bridge.execution.clock import SimClock
+
+    clock = SimClock()
+    hold = PlanHold()
+    hold.alarm = lambda: 1.005  # after undock's end (1.0), before inspect's start (1.01)
+    model = ActionModel(task)
+    belief = WorldState(task.initial_facts, model.initial_values())
+    registry = SkillRegistry()
+    registry.fallback = lambda step: ClockSkill(clock, step.duration or 0.0)
+    compiled = compile_temporal(PLAN, registry, model, belief, clock=clock, hold=hold)
+    dispatch = compiled.machine
+    assert dispatch.execute() == "preempted"
+    records = {s.ground.name: s.record.outcome for s in compiled.step_states}
+    assert records == {"hold-light": "succeeded", "undock": "succeeded", "inspect": ""}
+    assert clock.now() == pytest.approx(4.0)  # the light's hold ran to its planned end
+
+
+class ClockSkill(smach.State):
+    """A skill that takes ``seconds`` of a simulated clock."""
+
+    def __init__(self, clock: Any, seconds: float) -> None:
+        super().__init__(["succeeded", "aborted", "preempted"])
+        self.clock = clock
+        self.seconds = seconds
+
+    def execute(self, ud: smach.UserData) -> str:
+        self.clock.sleep(self.seconds, self.preempt_requested)
+        return "succeeded"
