@@ -17,7 +17,7 @@ from __future__ import annotations
 import itertools
 import math
 import threading
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any
 
 from plan_bridge.errors import PlanBridgeError
@@ -143,9 +143,18 @@ class OrderBook:
         with self._lock:
             if self._live:
                 return -math.inf
+            self._skip_taken()
             if self._next_scheduled < len(self._scheduled):
                 return self._scheduled[self._next_scheduled].at
             return None
+
+    def _skip_taken(self) -> None:
+        """Move past scheduled orders already in the book (cancelled before arriving)."""
+        while (
+            self._next_scheduled < len(self._scheduled)
+            and self._scheduled[self._next_scheduled].id in self._states
+        ):
+            self._next_scheduled += 1
 
     def arrivals(self, now: float) -> list[Order]:
         """Take the orders that have arrived by ``now`` (scheduled ones in time order,
@@ -153,12 +162,14 @@ class OrderBook:
         :meth:`refuse`-d."""
         with self._lock:
             taken: list[Order] = []
+            self._skip_taken()
             while (
                 self._next_scheduled < len(self._scheduled)
                 and self._scheduled[self._next_scheduled].at <= now + 1e-9
             ):
                 taken.append(self._scheduled[self._next_scheduled])
                 self._next_scheduled += 1
+                self._skip_taken()
             for order in self._live:
                 within = order.deadline
                 deadline = None if within is None else round(now + within, 3)
@@ -173,6 +184,7 @@ class OrderBook:
     def finished(self) -> bool:
         """Closed, nothing left to arrive, and every order final."""
         with self._lock:
+            self._skip_taken()
             return (
                 self._closed
                 and not self._live
@@ -191,9 +203,9 @@ class OrderBook:
     def _unknown(self, order_id: str) -> str:
         from plan_bridge.pddl.constructs import did_you_mean
 
-        waiting = [o.id for o in self._scheduled[self._next_scheduled :]] + [
-            o.id for o in self._live
-        ]
+        waiting = [
+            o.id for o in self._scheduled[self._next_scheduled :] if o.id not in self._states
+        ] + [o.id for o in self._live]
         if order_id in waiting:
             return f"order {order_id!r} has not arrived yet"
         return f"no order {order_id!r}{did_you_mean(order_id, self._states)}"
@@ -280,9 +292,9 @@ class OrderBook:
                 )
                 self._states[order_id] = OrderState(order, arrived=now)
             else:
-                for i in range(self._next_scheduled, len(self._scheduled)):
-                    if self._scheduled[i].id == order_id:
-                        order = self._scheduled.pop(i)
+                for order in self._scheduled[self._next_scheduled :]:
+                    if order.id == order_id and order_id not in self._states:
+                        # It will not arrive: arrivals skip ids the book has.
                         self._states[order_id] = OrderState(order, arrived=now)
                         break
             state = self.get(order_id)
@@ -337,6 +349,31 @@ class OrderBook:
         for wake in self._wakers:
             wake()
 
+    # -- checkpoints ---------------------------------------------------------------------------
+    def snapshot(self) -> dict[str, Any]:
+        """What a resumed mission needs of the book (JSON data): every order that has
+        arrived with its life, how far the schedule got, live orders not taken yet."""
+        with self._lock:
+            return {
+                "next": self._next_scheduled,
+                "closed": self._closed,
+                "live": [o.to_json() for o in self._live],
+                "states": [s.to_record() for s in self._states.values()],
+            }
+
+    def restore(self, data: Mapping[str, Any]) -> None:
+        """Take up a :meth:`snapshot` (of a book built with the same schedule)."""
+        with self._lock:
+            self._next_scheduled = int(data["next"])
+            self._closed = bool(data["closed"])
+            self._live = [Order.from_json(item) for item in data["live"]]
+            self._states = {}
+            for record in data["states"]:
+                state = OrderState.from_record(record)
+                self._states[state.id] = state
+            self._ids |= set(self._states) | {o.id for o in self._live}
+            self._changed = True
+
     # -- accounts ------------------------------------------------------------------------------
     def counts(self) -> dict[str, int]:
         """Orders by status (every status, 0 included), and ``late``."""
@@ -353,7 +390,9 @@ class OrderBook:
         the mission's clock over ``elapsed_s``."""
         with self._lock:
             states = list(self._states.values())
-            waiting = len(self._scheduled) - self._next_scheduled + len(self._live)
+            waiting = len(self._live) + sum(
+                1 for o in self._scheduled[self._next_scheduled :] if o.id not in self._states
+            )
         latencies = [s.latency for s in states if s.latency is not None]
         done = sum(1 for s in states if s.status is OrderStatus.DONE)
         p50, p95 = percentile(latencies, 50), percentile(latencies, 95)

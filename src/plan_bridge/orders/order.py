@@ -19,6 +19,7 @@ the journal and the viewer follow.
 from __future__ import annotations
 
 import enum
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
@@ -71,6 +72,19 @@ class Order:
             data["origin"] = self.origin
         return data
 
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> Order:
+        """The order of :meth:`to_json`'s data."""
+        deadline = data.get("deadline")
+        return cls(
+            str(data["id"]),
+            str(data["goal"]),
+            float(data["at"]),
+            int(data.get("priority", 0)),
+            None if deadline is None else float(deadline),
+            str(data.get("origin", "")),
+        )
+
 
 @dataclass
 class OrderState:
@@ -116,6 +130,37 @@ class OrderState:
             and deadline is not None
             and self.ended is not None
             and self.ended > deadline + 1e-9
+        )
+
+    def to_record(self) -> dict[str, Any]:
+        """Everything of the state, as JSON data (a checkpoint's)."""
+        return {
+            "order": self.order.to_json(),
+            "status": self.status.value,
+            "atoms": [list(atom) for atom in self.atoms],
+            "robots": list(self.robots),
+            "reason": self.reason,
+            "arrived": self.arrived,
+            "started": self.started,
+            "ended": self.ended,
+            "attempts": self.attempts,
+            "history": [list(change) for change in self.history],
+        }
+
+    @classmethod
+    def from_record(cls, data: Mapping[str, Any]) -> OrderState:
+        """The state of :meth:`to_record`'s data."""
+        return cls(
+            Order.from_json(data["order"]),
+            OrderStatus(data["status"]),
+            tuple(tuple(str(w) for w in atom) for atom in data["atoms"]),
+            tuple(str(r) for r in data["robots"]),
+            str(data["reason"]),
+            data["arrived"],
+            data["started"],
+            data["ended"],
+            int(data["attempts"]),
+            [(float(t), str(status)) for t, status in data["history"]],
         )
 
     def to_json(self) -> dict[str, Any]:

@@ -57,6 +57,8 @@ __all__ = ["BENCH_S", "DEFAULT_ATTEMPTS", "DEFAULT_PER_ROBOT", "GoalReader", "Or
 DEFAULT_PER_ROBOT = 2
 #: Plans given up for one order (its robots' recovery exhausted) before it fails.
 DEFAULT_ATTEMPTS = 2
+#: Entries of the report's lists of steps and decisions a checkpoint keeps.
+KEPT_IN_CHECKPOINT = 50
 #: Seconds (mission clock) a robot whose step failed past recovery is left out of
 #: plans, so that another robot takes its orders over.
 BENCH_S = 300.0
@@ -148,6 +150,9 @@ class OrderExecutive(Executive):
         self._t0 = clock_of(self.world).now()
         self.busy_s = {}
         self.benched = {}
+        resume, self._resume = self._resume, None
+        if resume is not None:
+            self._take_up(resume)
         recovery = self._begin_mission()
         recovery.replanner.restrict = self._without_benched
         self._sense()
@@ -406,6 +411,35 @@ class OrderExecutive(Executive):
             self._replanner.new_window()
         self._planned_for = ()
 
+    # -- checkpoints -----------------------------------------------------------------------------
+    def snapshot(self) -> dict[str, Any]:
+        """The executive's checkpoint, with the book and the mission's clock. The
+        report's lists of steps and decisions keep their last :data:`KEPT_IN_CHECKPOINT`
+        entries (a day's run would otherwise write them whole at every step)."""
+        data = super().snapshot()
+        report = data["report"]
+        for key in ("executed", "decisions"):
+            report[key] = report[key][-KEPT_IN_CHECKPOINT:]
+        data["orders"] = self.orders.snapshot()
+        data["mission"] = {
+            "t0": self._t0,
+            "benched": dict(self.benched),
+            "busy_s": dict(self.busy_s),
+        }
+        return data
+
+    def _take_up(self, snapshot: dict[str, Any]) -> None:
+        """Continue from a checkpoint: the belief, the report, the book and the clock;
+        the open orders are planned again from the belief (nothing done is redone)."""
+        self._restore(snapshot)
+        self._resume_plan_zero = None  # the next plan is a new one, not the killed one's
+        if "orders" in snapshot:
+            self.orders.restore(snapshot["orders"])
+        mission = snapshot.get("mission", {})
+        self._t0 = float(mission.get("t0", self._t0))
+        self.benched = {str(r): float(t) for r, t in mission.get("benched", {}).items()}
+        self.busy_s = {str(r): float(t) for r, t in mission.get("busy_s", {}).items()}
+
     # -- robots left out ----------------------------------------------------------------------
     def _bench(self, robots: Sequence[str]) -> None:
         """Leave ``robots`` out of plans for :data:`BENCH_S` (unless no robot would be left)."""
@@ -450,9 +484,9 @@ class OrderExecutive(Executive):
             robots, began = self._in_steps.pop(record.index, ((), now))
             for robot in robots:
                 self.busy_s[robot] = self.busy_s.get(robot, 0.0) + max(0.0, now - began)
-        super()._step_finished(record)
         if record.outcome == "succeeded":  # (a step that did not start holds the belief)
-            self._mark_done()
+            self._mark_done()  # before the checkpoint the step's end writes
+        super()._step_finished(record)
 
     def _order_changed(self, state: OrderState) -> None:
         self._announce(
