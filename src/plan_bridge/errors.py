@@ -14,10 +14,12 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TypedDict, Unpack
 
 __all__ = [
     "FactError",
     "PddlError",
+    "PddlPlace",
     "PlanBridgeError",
     "PlannerNotFoundError",
     "Terminated",
@@ -109,6 +111,16 @@ class PddlError(PlanBridgeError):
         return {}
 
 
+class PddlPlace(TypedDict, total=False):
+    """The keywords of :class:`PddlError` that say where, as its subclasses take them."""
+
+    path: str | Path | None
+    line: int | None
+    column: int | None
+    excerpt: str
+    hint: str
+
+
 class UnsupportedFeatureError(PddlError):
     """A PDDL feature the parser or the installed engines cannot handle.
 
@@ -123,17 +135,11 @@ class UnsupportedFeatureError(PddlError):
         *,
         feature: str,
         supporting_engines: Sequence[str] = (),
-        path: str | Path | None = None,
-        line: int | None = None,
-        column: int | None = None,
-        excerpt: str = "",
-        hint: str = "",
+        **place: Unpack[PddlPlace],
     ) -> None:
         self.feature = feature
         self.supporting_engines = tuple(supporting_engines)
-        super().__init__(
-            explanation, path=path, line=line, column=column, excerpt=excerpt, hint=hint
-        )
+        super().__init__(explanation, **place)
 
     def _extra_state(self) -> dict[str, object]:
         return {"feature": self.feature, "supporting_engines": self.supporting_engines}

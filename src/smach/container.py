@@ -33,7 +33,6 @@ docs/containers.md.
 from __future__ import annotations
 
 import contextlib
-import threading
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from typing import Any, ClassVar, NoReturn, TypeVar
 
@@ -56,8 +55,6 @@ from smach.state import State
 from smach.user_data import Remapper, UserData, make_remapper
 
 __all__ = ["Container", "construction_method"]
-
-_current_thread = threading.current_thread
 
 C = TypeVar("C", bound="Container")
 
@@ -297,10 +294,8 @@ class Container(ContainerEvents, ContainerChecks, ContainerScope, State):
         1. compile, if anything changed since the last run (``_prepare``: the tree is
            checked once, the run tables are built);
         2. refuse a second run while one is going on;
-        3. copy input keys in, decide who listens this run (what ``_begin`` does, inline:
-           a method call per container counts in deep trees; overriding ``_begin``
-           changes only containers that write their own ``execute``);
-        4. ``container_started``; then the container's own loop, ``run_children()``;
+        3. copy input keys in, decide who listens this run (``_begin``);
+        4. ``container_started`` (``_announce_start``); then the container's own loop, ``run_children()``;
         5. the outcome checked against the declared ones; ``container_terminated``;
            output keys copied out (all skipped when ``run_children`` returned ``None``
            because ``smach.is_shutdown()`` became true);
@@ -314,22 +309,8 @@ class Container(ContainerEvents, ContainerChecks, ContainerScope, State):
             raise InvalidStateError(f"{self._path} is already running (in another thread?)")
         self._running = True
         try:
-            # What _begin does (for containers that write their own execute), inlined:
-            # one call less per container counts in deep trees.
-            if parent_ud is not None and self._copies_in:
-                self._copy_input_keys(parent_ud)
-            rt = self._rt
-            if self._parent is None:
-                rt.log_info = info_enabled()
-            self._log_info = rt.log_info
-            bus = rt.bus
-            if bus.listeners or self._local:
-                self._thread = _current_thread().name
-                self._emit_started(self._start_states(), self._thread)
-            else:
-                self._thread = None
-                if self._log_info:
-                    self._log_started()
+            self._begin(parent_ud)
+            self._announce_start()
             outcome = self.run_children()
             if outcome is None:
                 return None
@@ -338,7 +319,7 @@ class Container(ContainerEvents, ContainerChecks, ContainerScope, State):
                     f"{self._path}: the {type(self).__name__} ended with {outcome!r}, which is "
                     f"not one of its outcomes: {', '.join(self._outcomes)}"
                 )
-            if bus.listeners or self._local:
+            if self._rt.bus.listeners or self._local:
                 self._emit_terminated(self._terminal_states(), outcome, self._thread)
             elif self._log_info:
                 self._log_terminated(outcome)
@@ -430,9 +411,8 @@ class Container(ContainerEvents, ContainerChecks, ContainerScope, State):
 
     # -- running helpers (also for containers that write their own execute) ------------
     def _begin(self, parent_ud: UserData | None) -> None:
-        """Start a run: copy input keys in, decide whether log lines are wanted (for a
-        container that writes its own ``execute``; ``Container.execute`` does the same
-        inline).
+        """Start a run: copy input keys in, decide whether log lines are wanted (also for
+        a container that writes its own ``execute``).
 
         Whether INFO lines are wanted is decided once per top-level run (it costs a
         logging lookup) and shared through the tree's runtime context (``Runtime``)

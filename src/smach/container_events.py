@@ -68,6 +68,8 @@ class ContainerEvents:
     _local: tuple[Listener, ...]
     # Whether this run writes INFO log lines (see Container._begin).
     _log_info: bool
+    # The thread running this container, when somebody listens (see _announce_start).
+    _thread: str | None
     #: Whether this class writes a line when a child is entered (``_log_entered``
     #: overridden): set per class, so a loop tests one flag.
     _logs_entries: ClassVar[bool] = False
@@ -247,6 +249,18 @@ class ContainerEvents:
             self._send(ContainerStarted, self._path, thread, kind, tuple(initial_states))
         if self._log_info:
             self._log_started()
+
+    def _announce_start(self) -> None:
+        """A run starts: the start event when somebody listens (the running thread's
+        name, read once, goes with every event of the run's own loop), else the start
+        line if lines are wanted."""
+        if self._rt.bus.listeners or self._local:
+            self._thread = _current_thread().name
+            self._emit_started(self._start_states(), self._thread)
+        else:
+            self._thread = None
+            if self._log_info:
+                self._log_started()
 
     def _emit_entered(self, label: str, thread: str | None = None) -> None:
         if self._rt.bus.listeners or self._local:

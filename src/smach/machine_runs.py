@@ -117,13 +117,10 @@ class MachineRuns(Container):
             if self._copies_in:
                 self._copy_input_keys(parent_ud)
             self._log_info = self._rt.log_info
-            if self._rt.bus.listeners or self._local:
-                self._thread = _current_thread().name
-                self._emit_started(self._start_states(), self._thread)
-            else:
+            if self._log_info or self._local or self._rt.bus.listeners:
+                self._announce_start()
+            else:  # (nothing to announce: no call, once per level of a deep tree)
                 self._thread = None
-                if self._log_info:
-                    self._log_started()
             if self._preempted_state is not None:
                 self._preempted_state = None
         except BaseException as exc:

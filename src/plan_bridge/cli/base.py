@@ -29,6 +29,7 @@ __all__ = [
     "PddlInput",
     "Terminated",
     "add_input_arguments",
+    "add_probe_argument",
     "bounded",
     "check_input",
     "fail",
@@ -118,6 +119,22 @@ def add_input_arguments(parser: argparse.ArgumentParser, *, optional: bool = Fal
         "ROSPlan-style problems leave (:goal (and)) to be filled at run time); for a "
         "pyrobosim world (WORLD.yaml or a folder with world.yaml), in pyrobosim's "
         'vocabulary, e.g. "(At apple0 table0_tabletop)" (see docs/sim.md)',
+    )
+
+
+def add_probe_argument(parser: argparse.ArgumentParser) -> None:
+    """``--probe [SECONDS]``: look for the ROS 2 servers of the skill map (``check``,
+    ``skills``)."""
+    parser.add_argument(
+        "--probe",
+        nargs="?",
+        type=float,
+        const=3.0,
+        default=None,
+        metavar="SECONDS",
+        help="also check that the ROS 2 server of every ros_action, ros_service and ros_topic "
+        "entry of skills.toml is up with the type the map names, waiting up to SECONDS "
+        "(default 3) for them; exit 1 when one is not",
     )
 
 

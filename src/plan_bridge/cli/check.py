@@ -16,6 +16,7 @@ from plan_bridge.cli.base import (
     Command,
     InputError,
     add_input_arguments,
+    add_probe_argument,
     check_input,
     fail,
     resolve_input,
@@ -25,21 +26,6 @@ from plan_bridge.cli.base import (
 def _configure_check(parser: argparse.ArgumentParser) -> None:
     add_input_arguments(parser)
     add_probe_argument(parser)
-
-
-def add_probe_argument(parser: argparse.ArgumentParser) -> None:
-    """``--probe [SECONDS]``: look for the ROS 2 servers of the skill map."""
-    parser.add_argument(
-        "--probe",
-        nargs="?",
-        type=float,
-        const=3.0,
-        default=None,
-        metavar="SECONDS",
-        help="also check that the ROS 2 server of every ros_action, ros_service and ros_topic "
-        "entry of skills.toml is up with the type the map names, waiting up to SECONDS "
-        "(default 3) for them; exit 1 when one is not",
-    )
 
 
 def _check(args: argparse.Namespace) -> int:

@@ -22,6 +22,7 @@ from plan_bridge.cli.base import (
     Command,
     InputError,
     add_input_arguments,
+    add_probe_argument,
     check_input,
     fail,
     resolve_input,
@@ -119,7 +120,7 @@ def bindings(
     module name, shown as ``folder_name``; ``fallback``: whether actions without a skill
     are simulated (default: whether ``registry`` has a fallback)."""
     simulated = registry.fallback is not None if fallback is None else fallback
-    from plan_bridge.skills.skill_map import describe_factory, registered_skill
+    from plan_bridge.skills.skill_map_model import describe_factory, registered_skill
 
     def name_of(factory: object) -> str:
         text = describe_factory(factory)
@@ -163,16 +164,7 @@ def bindings(
 def _configure(parser: argparse.ArgumentParser) -> None:
     add_input_arguments(parser)
     parser.add_argument("--json", action="store_true", help="print one JSON object")
-    parser.add_argument(
-        "--probe",
-        nargs="?",
-        type=float,
-        const=3.0,
-        default=None,
-        metavar="SECONDS",
-        help="also check that the ROS 2 servers of the skill map are up (waiting up to "
-        "SECONDS, default 3); exit 1 when one is not",
-    )
+    add_probe_argument(parser)
 
 
 @dataclass(frozen=True)

@@ -303,12 +303,7 @@ class Worker:
         assert stdin is not None
         line = json.dumps(request) + "\n"
         if not self._write_lock.acquire(timeout=max(0.0, deadline - time.monotonic())):
-            self.kill()
-            return SolveReply(
-                "timeout",
-                message=f"no answer within {timeout:g} s: killed the planner process",
-                engine_time_s=time.monotonic() - started,
-            )
+            return self._killed("timeout", timeout, started)
         try:
             stdin.write(line)
             stdin.flush()
@@ -325,22 +320,23 @@ class Worker:
                 if cancel is not None and left > 0.02:
                     if not cancel.is_set():
                         continue
-                    self.kill()
-                    return SolveReply(
-                        "cancelled",
-                        message="cancelled: killed the planner process",
-                        engine_time_s=time.monotonic() - started,
-                    )
-                self.kill()
-                return SolveReply(
-                    "timeout",
-                    message=f"no answer within {timeout:g} s: killed the planner process",
-                    engine_time_s=time.monotonic() - started,
-                )
+                    return self._killed("cancelled", timeout, started)
+                return self._killed("timeout", timeout, started)
             if reply is None:
                 return SolveReply("crashed", message=self._crash_message())
             if reply.get("id") == request_id:
                 return reply
+
+    def _killed(self, outcome: str, timeout: float, started: float) -> SolveReply:
+        """Kill the process and say why: ``"timeout"`` (no answer within ``timeout``
+        seconds) or ``"cancelled"``."""
+        self.kill()
+        why = "cancelled" if outcome == "cancelled" else f"no answer within {timeout:g} s"
+        return SolveReply(
+            outcome,
+            message=f"{why}: killed the planner process",
+            engine_time_s=time.monotonic() - started,
+        )
 
     def _crash_message(self) -> str:
         code = self.process.wait(timeout=5)

@@ -31,8 +31,8 @@ once, each as ``skills.toml:LINE: ...``, as a :class:`SkillMapError`);
 (``simulated=False``). :meth:`plan_bridge.missions.mission.Target.setup` applies a
 domain folder's ``skills.toml`` on its own.
 
-The map's types are in :mod:`~plan_bridge.skills.skill_map_model` (re-exported
-here); the checks of each entry in :mod:`~plan_bridge.skills.skill_map_checks`;
+The map's types are in :mod:`~plan_bridge.skills.skill_map_model` (those
+:func:`load_skill_map` returns and raises are re-exported here); the checks of each entry in :mod:`~plan_bridge.skills.skill_map_checks`;
 reading the TOML with line positions and importing factories in
 :mod:`~plan_bridge.skills.skill_map_source`.
 """
@@ -44,35 +44,22 @@ from types import ModuleType
 
 from plan_bridge.skills.skill_map_checks import check_skill_map
 from plan_bridge.skills.skill_map_model import (
-    ENTRY_KEYS,
     MAP_FILE,
-    ConstantPick,
     HasActions,
     MapProblem,
-    ParameterPick,
-    SelectedArguments,
     SkillMap,
     SkillMapEntry,
     SkillMapError,
-    describe_factory,
-    registered_skill,
 )
 
+# The map and its error are re-exported: what load_skill_map returns and raises.
 __all__ = [
-    "ENTRY_KEYS",
-    "MAP_FILE",
-    "ConstantPick",
-    "HasActions",
     "MapProblem",
-    "ParameterPick",
-    "SelectedArguments",
     "SkillMap",
     "SkillMapEntry",
     "SkillMapError",
-    "describe_factory",
     "find_skill_map",
     "load_skill_map",
-    "registered_skill",
 ]
 
 

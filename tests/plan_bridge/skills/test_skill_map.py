@@ -16,12 +16,8 @@ from plan_bridge.missions.mission import load_target
 from plan_bridge.pddl.task import PlanningTask, load_task
 from plan_bridge.planning.planner import PlanStep
 from plan_bridge.skills.registry import SkillRegistry
-from plan_bridge.skills.skill_map import (
-    SelectedArguments,
-    SkillMap,
-    SkillMapError,
-    load_skill_map,
-)
+from plan_bridge.skills.skill_map import SkillMap, SkillMapError, load_skill_map
+from plan_bridge.skills.skill_map_model import SelectedArguments
 
 COURIER = Path(__file__).parents[1] / "data" / "courier"
 DRIVE = PlanStep("drive", ("rover", "lab", "store"))
