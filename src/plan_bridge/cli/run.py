@@ -339,6 +339,11 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
         # The mission's problem as a knowledge base, PlanSys2-style services on the
         # executive's node (/knowledge/add_problem_goal, ...; docs/planning.md).
         start.robot.serve_knowledge(mission.attach_knowledge())
+        from plan_bridge.orders.order_executive import OrderExecutive
+
+        if isinstance(executive, OrderExecutive):
+            # Orders over ROS 2: /orders/submit, cancel, list, the status topic (docs/orders.md).
+            start.robot.serve_orders(executive.desk())
     if checkpoint is not None:
         mission.resume(checkpoint)
     if not args.quiet:
@@ -548,9 +553,14 @@ def _serve_viewer(args: argparse.Namespace, mission: Mission, journal: Any, reso
         )
         mission.on_close(console.close)
         if args.control and viewer is not None:
+            from plan_bridge.orders.order_executive import OrderExecutive
             from smach.introspection.control_api import enable_controls
 
-            url = enable_controls(viewer, console.controller, actions=console.viewer_actions())
+            actions = console.viewer_actions()
+            if isinstance(executive, OrderExecutive):
+                # Orders sent while it runs: order, cancel, orders (docs/orders.md).
+                actions.update(executive.desk().actions())
+            url = enable_controls(viewer, console.controller, actions=actions)
             print(f"control: {url}", file=sys.stderr, flush=True)
     return viewer
 

@@ -32,8 +32,10 @@ from plan_bridge.ros.skills import remote_info, ros_skills
 from plan_bridge.skills.registry import SkillRegistry
 
 if TYPE_CHECKING:
+    from plan_bridge.orders.requests import OrderDesk
     from plan_bridge.pddl.knowledge import KnowledgeBase
     from plan_bridge.ros.knowledge_services import KnowledgeServices
+    from plan_bridge.ros.order_services import OrderServices
 
 __all__ = ["RobotConnection", "RobotError", "RobotLost", "RobotWorld"]
 
@@ -110,6 +112,7 @@ class RobotConnection:
         self._ready = threading.Event()
         self._pump_thread: threading.Thread | None = None
         self._knowledge_services: list[KnowledgeServices] = []
+        self._order_services: list[OrderServices] = []
         #: When the robot's heartbeat was last heard (None: not yet).
         self._last_beat: float | None = None
 
@@ -357,11 +360,30 @@ class RobotConnection:
         self._knowledge_services.append(services)
         return services
 
+    def serve_orders(self, desk: OrderDesk, *, name: str = "orders") -> OrderServices:
+        """Serve a mission's orders on the executive's node
+        (:mod:`plan_bridge.ros.order_services`: ``/NAME/submit``, ``cancel``, ``list``
+        and the ``status`` topic); the services go in :meth:`close`."""
+        from plan_bridge.ros.order_services import OrderServices
+
+        if self.node is None:
+            raise RobotError("not connected: open() the connection before serving orders")
+        services = OrderServices(self.node, desk, name=name)
+        self._order_services.append(services)
+        self._say(
+            f"ros: orders served: {services.names['submit']}, {services.names['cancel']}, "
+            f"{services.names['list']}; status on {services.names['status']}"
+        )
+        return services
+
     def close(self) -> None:
         """Leave the ROS graph; stop the robot process if we started it."""
         for services in self._knowledge_services:
             services.close()
         self._knowledge_services = []
+        for order_services in self._order_services:
+            order_services.close()
+        self._order_services = []
         if self.context is not None:
             from smach.ros.executor import SmachExecutor
 

@@ -9,7 +9,9 @@ panel for one :class:`~smach.control.Controller`:
   actions. Reading needs no token (the page is readable anyway).
 * ``POST /api/control`` with a JSON body ``{"action": ..., ...}`` performs an action;
   it needs the header ``X-Control-Token`` with the run's token and
-  ``Content-Type: application/json``.
+  ``Content-Type: application/json``. An extra action's reply holds what it returned
+  as text (``result``) and, when that is a mapping or a list (plan_bridge's order
+  listing, say), as JSON too (``data``).
 
 Security: the token is random per run (``secrets``), compared in constant time,
 and only shown in the URL printed for the operator (``...#token=...``, a fragment,
@@ -115,7 +117,7 @@ class ViewerControls:
             if action in _CORE_ACTIONS:
                 _perform_core(ctl, action, body, path, source)
             elif isinstance(action, str) and action in self.actions:
-                return {"ok": True, "result": self._perform_extra(action, body)}
+                return self._perform_extra(action, body)
             else:
                 allowed = ", ".join([*_CORE_ACTIONS, *sorted(self.actions)])
                 raise ValueError(f"unknown control action {action!r}; actions: {allowed}")
@@ -123,15 +125,19 @@ class ViewerControls:
             raise ValueError(str(exc)) from exc
         return {"ok": True, "status": ctl.status().to_json()}
 
-    def _perform_extra(self, action: str, body: Mapping[str, Any]) -> str | None:
-        """Call the extra ``action``; what it returns, as text."""
+    def _perform_extra(self, action: str, body: Mapping[str, Any]) -> dict[str, Any]:
+        """Call the extra ``action``: the reply holds what it returned as text
+        (``result``) and, when that is a mapping or a list, as JSON data (``data``)."""
         try:
             result = self.actions[action](body)
         except ValueError:
             raise
         except Exception as exc:  # an answer, never a dropped connection
             raise ValueError(f"{action} failed: {type(exc).__name__}: {exc}") from exc
-        return str(result) if result is not None else None
+        if isinstance(result, Mapping | list | tuple):
+            data = json.loads(json.dumps(result, default=str, ensure_ascii=False))
+            return {"ok": True, "result": json.dumps(data, ensure_ascii=False), "data": data}
+        return {"ok": True, "result": str(result) if result is not None else None}
 
     def handle_post(self, headers: Headers, read: Callable[[int], bytes]) -> dict[str, Any]:
         """Check the headers and the body of a POST, then :meth:`perform` it.

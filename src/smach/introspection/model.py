@@ -15,7 +15,9 @@ record kinds exist for viewers: ``structure`` (the tree changed), ``userdata``
 (a snapshot of a container's userdata) and ``resync`` (the active states read from
 the live tree after the viewer dropped events). A ``scene`` record
 (:class:`~smach.introspection.events.SceneChanged`: a picture of the world, SVG text)
-is kept as the view's :attr:`ViewModel.scene` until the next one.
+is kept as the view's :attr:`ViewModel.scene` until the next one. The ``order``
+records of a mission of orders (plan_bridge's ``OrderChanged``) make the queue
+panel's rows (:attr:`ViewModel.orders`).
 """
 
 from __future__ import annotations
@@ -34,6 +36,9 @@ MAX_ERRORS = 50
 MAX_DECISIONS = 200
 MAX_PLANS = 50
 MAX_STEPS = 500
+MAX_ORDERS = 1000
+#: Statuses an order never leaves (plan_bridge.orders.order.FINAL, by name).
+FINAL_ORDER_STATUSES = frozenset({"done", "failed", "refused", "cancelled"})
 
 
 @dataclass
@@ -67,6 +72,11 @@ class ViewModel:
     scene: dict[str, Any] | None = None
     """The newest picture of the world (a ``scene`` record): ``n`` (the record's number,
     counted from 1), ``time``, ``title``, ``path`` and ``svg`` (the SVG text)."""
+    orders: dict[str, dict[str, Any]] = field(default_factory=dict)
+    """The orders of a mission of orders by id, in arrival order (the queue panel):
+    ``id``, ``goal``, ``status``, ``robots``, ``priority``, ``reason``, ``arrived``,
+    ``changed`` and ``ended`` (seconds of the mission's clock), ``latency`` (done
+    ones). At most :data:`MAX_ORDERS`: the oldest final ones go first."""
 
     # -- folding ---------------------------------------------------------------------------
     def apply(self, record: Mapping[str, Any]) -> None:
@@ -252,6 +262,39 @@ class ViewModel:
                 "svg": svg,
             }
 
+    def _order(self, path: str, record: Mapping[str, Any]) -> None:
+        name = record.get("order")
+        if not isinstance(name, str) or not name:
+            return
+        status = str(record.get("status", ""))
+        at = _seconds(record.get("at"))
+        row = self.orders.get(name)
+        arrived = row["arrived"] if row is not None else _seconds(record.get("arrived"), at)
+        robots = record.get("robots") or ()
+        new = {
+            "id": name,
+            "goal": str(record.get("goal", "")),
+            "status": status,
+            "robots": [str(r) for r in robots] if isinstance(robots, list | tuple) else [],
+            "priority": record.get("priority") or 0,
+            "reason": str(record.get("reason", "") or ""),
+            "arrived": arrived,
+            "changed": at,
+        }
+        if status in FINAL_ORDER_STATUSES:
+            new["ended"] = at
+        if status == "done":
+            given = _seconds(record.get("latency"))
+            latency = given if given is not None else _difference(at, arrived)
+            if latency is not None:
+                new["latency"] = round(latency, 3)
+        # A row is replaced, never changed in place: copies of the view share rows.
+        self.orders[name] = new
+        if len(self.orders) > MAX_ORDERS:
+            final = [k for k, v in self.orders.items() if v["status"] in FINAL_ORDER_STATUSES]
+            for gone in (final or list(self.orders))[: len(self.orders) - MAX_ORDERS]:
+                del self.orders[gone]
+
     # -- helpers ------------------------------------------------------------------------------
     def _deactivate(self, path: str) -> None:
         if path in self.active:
@@ -299,6 +342,7 @@ class ViewModel:
             running_step=self.running_step,
             timeline=self.timeline.copy(),
             scene=self.scene,
+            orders=dict(self.orders),
         )
 
     def to_json(self) -> dict[str, Any]:
@@ -326,6 +370,7 @@ class ViewModel:
             "running_step": self.running_step,
             "gantt": self._gantt_summary(),
             "scene": self.scene_summary(),
+            "orders": list(self.orders.values()),
         }
 
     def scene_summary(self) -> dict[str, Any] | None:
@@ -366,7 +411,19 @@ _HANDLERS = {
     "action_started": ViewModel._action_started,
     "action_ended": ViewModel._action_ended,
     "scene": ViewModel._scene,
+    "order": ViewModel._order,
 }
+
+
+def _seconds(value: object, default: float | None = None) -> float | None:
+    """``value`` as seconds (None, a bool or text: ``default``)."""
+    if isinstance(value, int | float) and not isinstance(value, bool):
+        return float(value)
+    return default
+
+
+def _difference(end: float | None, start: float | None) -> float | None:
+    return None if end is None or start is None else end - start
 
 
 def graft(tree: dict[str, Any] | None, subtree: dict[str, Any], path: str = "") -> dict[str, Any]:

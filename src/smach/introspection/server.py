@@ -49,6 +49,8 @@ STATIC = {
     "gantt.css": "text/css; charset=utf-8",
     "scene.js": "text/javascript; charset=utf-8",
     "scene.css": "text/css; charset=utf-8",
+    "orders.js": "text/javascript; charset=utf-8",
+    "orders.css": "text/css; charset=utf-8",
 }
 MAX_RECORDS_PER_MESSAGE = 300
 MAX_RECORDS_PER_REQUEST = 2000

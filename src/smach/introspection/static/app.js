@@ -484,6 +484,8 @@ function describe(r) {
     case "action_ended": return `step ${r.index} ${r.action} ended: ${r.outcome}`;
     case "observations_applied": return `observed ${(r.changed || []).join(", ")}`;
     case "scene": return `picture of the world${r.title ? ": " + r.title : ""}`;
+    case "order": return `order ${r.order} ${r.status}${(r.robots || []).length ? " (" + r.robots.join(", ") + ")" : ""}` +
+      `${r.status === "queued" && r.goal ? ": " + r.goal : ""}${r.reason ? ": " + r.reason : ""}`;
     case "control": return `${r.action} (from ${r.source})${r.details && r.details.reason ? ": " + r.details.reason : ""} → ${r.state}`;
     default: return short(r, 200);
   }
