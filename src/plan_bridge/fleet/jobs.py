@@ -89,7 +89,7 @@ def _movables(atom: Fact) -> list[str]:
         return [args[1]]
     if name in ("holding",):
         return list(args)
-    if name == "handempty":
+    if name in ("handempty", "charged"):
         return [args[0]]
     return []
 

@@ -9,7 +9,8 @@
 ; duration is the route's length over the robot's speed, the route is the map's: the
 ; skill drives it); a closed hallway is crossed from one doorway to the other once a
 ; robot has opened it. Driving drains the battery by (drain-per-metre ?r) per metre;
-; chargers recharge it. Gates open, close and lock: hallways (hall) and pyrobosim
+; chargers recharge it: a robot is (charged ?r) from a charge until it drives again (a
+; mission of orders sends a robot low on battery to charge with this goal). Gates open, close and lock: hallways (hall) and pyrobosim
 ; locations (fixture).
 (define (domain robosim)
   (:requirements :strips :typing :durative-actions :numeric-fluents)
@@ -30,7 +31,8 @@
     (hall-ends ?a ?b - spot ?h - hall)
     (spawn-of ?s - spot ?l - fixture)
     (reaches-gate ?s - spot ?g - gate)
-    (is-charger ?l - fixture))
+    (is-charger ?l - fixture)
+    (charged ?r - bot))
   (:functions
     (battery-level ?r - bot)
     (drain-per-metre ?r - bot)
@@ -46,6 +48,7 @@
                     (at start (>= (battery-level ?r) (* (drain-per-metre ?r) (metres ?from ?to)))))
     :effect (and (at start (not (bot-ready ?r)))
                  (at start (not (At ?r ?from)))
+                 (at start (not (charged ?r)))
                  (at end (At ?r ?to))
                  (at end (bot-ready ?r))
                  (at end (decrease (battery-level ?r) (* (drain-per-metre ?r) (metres ?from ?to))))))
@@ -60,6 +63,7 @@
                     (at start (>= (battery-level ?r) (* (drain-per-metre ?r) (metres ?from ?to)))))
     :effect (and (at start (not (bot-ready ?r)))
                  (at start (not (At ?r ?from)))
+                 (at start (not (charged ?r)))
                  (at end (At ?r ?to))
                  (at end (bot-ready ?r))
                  (at end (decrease (battery-level ?r) (* (drain-per-metre ?r) (metres ?from ?to))))))
@@ -144,4 +148,5 @@
                     (at start (is-charger ?l)))
     :effect (and (at start (not (bot-ready ?r)))
                  (at end (assign (battery-level ?r) 100))
+                 (at end (charged ?r))
                  (at end (bot-ready ?r)))))

@@ -20,7 +20,7 @@ from __future__ import annotations
 import importlib.util
 import inspect
 import sys
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Collection, Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import ModuleType
@@ -144,6 +144,13 @@ class Target:
     def figures(self) -> dict[str, Any]:
         """What loading the target took, for a run's report (none here)."""
         return {}
+
+    def upkeep_goals(self, facts: Collection[Fact], values: Mapping[Fact, float]) -> list[Fact]:
+        """Goal atoms a mission of orders adds for its robots' sake in the belief
+        ``facts`` and ``values`` (a world with chargers: robots low on battery charge);
+        none for a PDDL target, whose domain says nothing of robots' upkeep."""
+        del facts, values
+        return []
 
     def read_order_goal(self, text: str) -> list[Fact]:
         """An order's goal (atoms such as ``(at r1 lab) (holding r1 cup)``) as atoms of

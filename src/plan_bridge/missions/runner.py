@@ -264,6 +264,7 @@ def prepare_mission(
             chosen,
             orders=book,
             goal_of=target.read_order_goal,
+            upkeep=target.upkeep_goals,
             **settings,
         )
     else:

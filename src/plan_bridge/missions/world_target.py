@@ -20,7 +20,7 @@ not used).
 from __future__ import annotations
 
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -40,7 +40,18 @@ if TYPE_CHECKING:
     from plan_bridge.planning.worker import WorkerPool
     from plan_bridge.robosim.world import RobosimWorld
 
-__all__ = ["WorldTarget", "load_world_target", "scripted_world", "variant_events"]
+__all__ = [
+    "LOW_BATTERY",
+    "WorldTarget",
+    "load_world_target",
+    "scripted_world",
+    "variant_events",
+]
+
+LOW_BATTERY = 40.0
+"""Battery (percent) under which a robot of a mission of orders goes to charge: enough
+for its orders in hand and the drive to a charger in buildings of tens of rooms at
+pyrobosim's default drain."""
 
 
 @dataclass
@@ -110,6 +121,19 @@ class WorldTarget(Target):
     def figures(self) -> dict[str, Any]:
         """pyrobosim's load of the world file, and ours: its map and first task."""
         return {"world_load_s": round(self.load_s, 3), "task_s": round(self.task_s, 3)}
+
+    def upkeep_goals(self, facts: Collection[Fact], values: Mapping[Fact, float]) -> list[Fact]:
+        """``(charged ROBOT)`` for every robot below :data:`LOW_BATTERY` percent, when the
+        world has a charger: its plan then ends at a charger, charged, whatever orders
+        it serves first (so that no plan strands a robot with a flat battery)."""
+        del facts
+        if self.view is None or not self.view.model.chargers():
+            return []
+        return [
+            ("charged", robot)
+            for robot in self.view.robots()
+            if values.get(("battery-level", robot), 100.0) < LOW_BATTERY
+        ]
 
     def read_order_goal(self, text: str) -> list[Fact]:
         """An order's goal: a goal's name of the folder's goals.yaml, or atoms in

@@ -385,9 +385,16 @@ class OrderBook:
         counts["late"] = sum(1 for s in states if s.late)
         return counts
 
-    def summary(self, elapsed_s: float) -> dict[str, Any]:
-        """Counts by status, latency (arrival to done) p50/p95, orders done per hour of
-        the mission's clock over ``elapsed_s``."""
+    def summary(
+        self,
+        elapsed_s: float,
+        busy_s: Mapping[str, float] | None = None,
+        robots: Iterable[str] = (),
+    ) -> dict[str, Any]:
+        """Counts by status, latency (arrival to done) p50/p95 and orders done per hour
+        of the mission's clock over ``elapsed_s``; with ``busy_s`` (seconds each robot
+        spent at work), each of ``robots``' share of ``elapsed_s`` (``busy_share``). The
+        ``orders`` figures of a run, planned or scripted."""
         with self._lock:
             states = list(self._states.values())
             waiting = len(self._live) + sum(
@@ -396,7 +403,7 @@ class OrderBook:
         latencies = [s.latency for s in states if s.latency is not None]
         done = sum(1 for s in states if s.status is OrderStatus.DONE)
         p50, p95 = percentile(latencies, 50), percentile(latencies, 95)
-        return {
+        data: dict[str, Any] = {
             "orders": len(states),
             "not_arrived": waiting,
             **self.counts(),
@@ -404,3 +411,8 @@ class OrderBook:
             "latency_p95_s": None if p95 is None else round(p95, 3),
             "orders_per_hour": round(done / (elapsed_s / 3600.0), 3) if elapsed_s > 0 else None,
         }
+        if busy_s is not None and elapsed_s > 0:
+            data["busy_share"] = {
+                robot: round(busy_s.get(robot, 0.0) / elapsed_s, 4) for robot in sorted(robots)
+            }
+        return data

@@ -190,3 +190,9 @@ class OrderChanged(Event):
     robots: tuple[str, ...] = ()
     reason: str = ""
     priority: int = 0
+    arrived: float | None = None
+    """When it arrived (the mission's clock)."""
+    latency: float | None = None
+    """Arrival to done, seconds (a done order's)."""
+    origin: str = ""
+    """Where it was written or sent from (``orders.yaml:7``, ``cli``, ``ros``)."""

@@ -32,7 +32,7 @@ Every status change is an :class:`~plan_bridge.orders.order.OrderChanged` event
 from __future__ import annotations
 
 import threading
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from typing import Any
 
 from plan_bridge.errors import PlanBridgeError
@@ -50,7 +50,14 @@ from plan_bridge.orders.requests import OrderDesk
 from plan_bridge.pddl.task import Fact, PlanningTask, format_fact
 from plan_bridge.planning.types import PlanStep
 
-__all__ = ["BENCH_S", "DEFAULT_ATTEMPTS", "DEFAULT_PER_ROBOT", "GoalReader", "OrderExecutive"]
+__all__ = [
+    "BENCH_S",
+    "DEFAULT_ATTEMPTS",
+    "DEFAULT_PER_ROBOT",
+    "GoalReader",
+    "OrderExecutive",
+    "UpkeepGoals",
+]
 
 #: Orders planned at once per robot (the horizon): enough to chain a robot's work,
 #: few enough that a plan stays a task's size however long the queue.
@@ -62,6 +69,10 @@ KEPT_IN_CHECKPOINT = 50
 #: Seconds (mission clock) a robot whose step failed past recovery is left out of
 #: plans, so that another robot takes its orders over.
 BENCH_S = 300.0
+
+UpkeepGoals = Callable[[Collection[Fact], Mapping[Fact, float]], Sequence[Fact]]
+"""Goal atoms for the robots' own sake in a belief (facts, values): a charge for a robot
+low on battery (:meth:`~plan_bridge.missions.mission.Target.upkeep_goals`)."""
 
 GoalReader = Callable[[str], Sequence[Fact]]
 """Reads an order's goal (atoms or a goal's name, in the target's words) into atoms
@@ -83,6 +94,7 @@ class OrderExecutive(Executive):
         *args: Any,
         orders: OrderBook,
         goal_of: GoalReader,
+        upkeep: UpkeepGoals | None = None,
         per_robot: int = DEFAULT_PER_ROBOT,
         attempts: int = DEFAULT_ATTEMPTS,
         **kwargs: Any,
@@ -94,6 +106,7 @@ class OrderExecutive(Executive):
             )
         self.orders = orders
         self.goal_of = goal_of
+        self.upkeep = upkeep
         self.per_robot = per_robot
         self.attempts = attempts
         view = self.task_view
@@ -102,6 +115,7 @@ class OrderExecutive(Executive):
         self._t0 = 0.0
         self._woken = threading.Event()
         self._planned_for: tuple[str, ...] = ()
+        self._planned_upkeep: tuple[Fact, ...] = ()
         # Plan position -> the orders that step serves, for the plan in force.
         self._serves: dict[int, tuple[str, ...]] = {}
         self._serves_lock = threading.Lock()
@@ -168,17 +182,18 @@ class OrderExecutive(Executive):
                 if not horizon and self._deferred:
                     self._deferred.clear()  # nothing else to wait for: try them again
                     continue
-                if not horizon:
-                    if self.orders.finished():
-                        self.report.explanation = "every order is accounted for: " + self._tally()
-                        self.decide("done", self.report.explanation)
-                        return "succeeded"
+                if self.orders.finished():
+                    self.report.explanation = "every order is accounted for: " + self._tally()
+                    self.decide("done", self.report.explanation)
+                    return "succeeded"
+                upkeep = self._upkeep()
+                if not horizon and not upkeep:
                     self._idle()
                     plan = []
                     continue
                 ids = tuple(s.id for s in horizon)
-                if not plan or ids != self._still_planned():
-                    plan = self._plan_for(horizon)
+                if not plan or (ids, upkeep) != (self._still_planned(), self._planned_upkeep):
+                    plan = self._plan_for(horizon, upkeep)
                     if not plan:
                         continue
                 plan = self._run_for_orders(plan, recovery)
@@ -306,7 +321,12 @@ class OrderExecutive(Executive):
         at = self.orders.next_arrival()
 
         def interrupted() -> bool:
-            return self.preempt_requested() or self._woken.is_set()
+            operator = self.operator
+            return (
+                self.preempt_requested()
+                or self._woken.is_set()
+                or (operator is not None and operator.pending() is not None)
+            )
 
         if at is not None:
             self.decide("wait", f"no open order; the next arrives at {at:g} s")
@@ -325,13 +345,32 @@ class OrderExecutive(Executive):
         else:
             self._use_task(task_with_goal(self.task, goal))
 
-    def _plan_for(self, horizon: list[OrderState]) -> list[PlanStep]:
-        """A plan for the orders of ``horizon``; [] when none (orders were refused,
-        failed or deferred: the loop looks again)."""
+    def _upkeep(self) -> tuple[Fact, ...]:
+        """The robots' own goals now (a charge for a robot low on battery)."""
+        if self.upkeep is None:
+            return ()
+        facts = self.belief.facts
+        return tuple(self.upkeep(facts, values_of(facts)))
+
+    def _plan_for(self, horizon: list[OrderState], upkeep: tuple[Fact, ...] = ()) -> list[PlanStep]:
+        """A plan for the orders of ``horizon`` and the robots' ``upkeep``; [] when none
+        (orders were refused, failed or deferred: the loop looks again)."""
         self._planned_for = tuple(s.id for s in horizon)
-        self._set_goal([a for s in horizon for a in s.atoms])
-        names = ", ".join(s.id for s in horizon)
-        result = self._replan_or_give_up(horizon, f"orders {names}")
+        self._planned_upkeep = upkeep
+        names = ", ".join(s.id for s in horizon) or "none"
+        result = None
+        if upkeep:
+            self._set_goal([*(a for s in horizon for a in s.atoms), *upkeep])
+            kept = " ".join(format_fact(a) for a in upkeep)
+            result = self._replan_or_give_up(horizon, f"orders {names}, and {kept}")
+            if result is not None and not result.solved:
+                self.decide("upkeep", f"no plan with {kept}: planning the orders alone")
+                self._planned_upkeep = ()
+        if result is None or not result.solved:
+            if not horizon:
+                return []
+            self._set_goal([a for s in horizon for a in s.atoms])
+            result = self._replan_or_give_up(horizon, f"orders {names}")
         if result is not None and result.solved:
             return list(result.actions)
         self._planned_for = ()
@@ -498,19 +537,16 @@ class OrderExecutive(Executive):
             robots=state.robots,
             reason=state.reason,
             priority=state.order.priority,
+            arrived=state.arrived,
+            latency=None if state.latency is None else round(state.latency, 3),
+            origin=state.order.origin,
         )
         if state.status in (OrderStatus.CANCELLED,) and state.id in self._planned_for:
             self.hold.request()
 
     def figures(self) -> dict[str, Any]:
         """The book's summary, and each robot's share of the mission's time in steps."""
-        data = self.orders.summary(self.elapsed_s)
-        if self.elapsed_s > 0:
-            data["busy_share"] = {
-                robot: round(self.busy_s.get(robot, 0.0) / self.elapsed_s, 4)
-                for robot in sorted(self.robots)
-            }
-        return data
+        return self.orders.summary(self.elapsed_s, self.busy_s, self.robots)
 
     def _tally(self) -> str:
         counts = self.orders.counts()
