@@ -21,6 +21,8 @@ from typing import Any
 
 import pytest
 
+from waiting import wait_until
+
 pytest.importorskip("smach.ros.rclpy_api", reason="needs rclpy (the ros extra)")
 
 from plan_bridge.execution.events import StepFinished
@@ -49,15 +51,6 @@ def planner() -> Any:
 @pytest.fixture
 def target() -> Target:
     return load_target(FETCH, "p01")
-
-
-def wait_for(predicate: Any, timeout: float) -> bool:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return True
-        time.sleep(0.01)
-    return False
 
 
 @pytest.fixture
@@ -94,10 +87,10 @@ def test_fetch_drink_succeeds_across_processes_without_faults(
     assert info is not None and info["goal_reached"] and info["busy"] == []
     facts = remote_facts(robot.node, prefix=robot.prefix)
     assert "(served alice cola)" in facts and "(fridge-closed kitchen-fridge)" in facts
-    # The skill machines ran in the robot process: it printed their states.
-    lines = list(robot.lines)
-    assert "  state /pick-drink/GRASP/ATTEMPT/CLOSE_GRIPPER" in lines
-    assert "succeeded (hand-over pr2 cola alice living-room)" in lines
+    # The skill machines ran in the robot process: it printed their states (the last
+    # line maybe after its result reached the executive).
+    assert wait_until(lambda: "succeeded (hand-over pr2 cola alice living-room)" in robot.lines)
+    assert "  state /pick-drink/GRASP/ATTEMPT/CLOSE_GRIPPER" in robot.lines
     print(
         f"\ncross-process mission: {elapsed:.2f} s ({ex.report.execution_time_s:.2f} s executing)"
     )
@@ -118,7 +111,7 @@ def test_faults_on_the_robot_trigger_replanning_and_the_goal_is_still_reached(
     # misplaced drink really was (the robot's DETECT state saw it).
     reasons = " ".join(d["reason"] for d in ex.report.decisions)
     assert "(on cola bottom-shelf)" in reasons
-    assert any(line.startswith("failed (pick-drink") for line in robot.lines)
+    assert wait_until(lambda: any(line.startswith("failed (pick-drink") for line in robot.lines))
 
 
 @pytest.mark.timeout(120)
@@ -133,11 +126,11 @@ def test_preempting_the_executive_cancels_the_remote_skill_and_stops_the_robot(
     thread.start()
     try:
         driving = "  state /navigate/DRIVE/ATTEMPT/DRIVE"
-        assert wait_for(lambda: driving in robot.lines, 60)
+        assert wait_until(lambda: driving in robot.lines, 60)
         time.sleep(0.3)
         asked = time.monotonic()
         ex.request_preempt()
-        assert wait_for(lambda: any(x.startswith("canceled (navigate") for x in robot.lines), 10)
+        assert wait_until(lambda: any(x.startswith("canceled (navigate") for x in robot.lines), 10)
         cancelled = time.monotonic() - asked
         thread.join(10)
         returned = time.monotonic() - asked
@@ -190,7 +183,7 @@ def test_a_robot_killed_mid_skill_ends_the_mission_within_a_bounded_time(
     box: dict[str, Any] = {}
     thread = threading.Thread(target=lambda: box.update(outcome=ex.execute()))
     thread.start()
-    assert wait_for(lambda: "  state /navigate/DRIVE/ATTEMPT/DRIVE" in robot.lines, 60)
+    assert wait_until(lambda: "  state /navigate/DRIVE/ATTEMPT/DRIVE" in robot.lines, 60)
     assert robot.process is not None
     killed = time.monotonic()
     aborted: list[float] = []
@@ -239,7 +232,7 @@ def test_a_robot_with_the_default_lease_killed_mid_skill_is_caught_by_its_heartb
     pumping = threading.Thread(target=pump, daemon=True)
     pumping.start()
     try:
-        assert wait_for(lambda: "ready" in lines, 60)
+        assert wait_until(lambda: "ready" in lines, 60)
         robot = start(robots, target, start_robot=False, prefix=prefix)
         ex = Executive(target.task, robot.skills(), planner)
         aborted: list[float] = []
@@ -253,7 +246,7 @@ def test_a_robot_with_the_default_lease_killed_mid_skill_is_caught_by_its_heartb
         box: dict[str, Any] = {}
         thread = threading.Thread(target=lambda: box.update(outcome=ex.execute()))
         thread.start()
-        assert wait_for(lambda: "  state /navigate/DRIVE/ATTEMPT/DRIVE" in lines, 60)
+        assert wait_until(lambda: "  state /navigate/DRIVE/ATTEMPT/DRIVE" in lines, 60)
         process.kill()
         killed = time.monotonic()
         thread.join(90)
@@ -313,7 +306,7 @@ def test_plan_bridge_run_ros_json_exits_0(tmp_path: Path) -> None:
     assert "step 1: (navigate" in result.stderr and "[robot]" not in result.stderr
     # The robot process it started is gone.
     pid = data["ros"]["robot_info"]["pid"]
-    assert wait_for(lambda: not Path(f"/proc/{pid}").exists(), 5)
+    assert wait_until(lambda: not Path(f"/proc/{pid}").exists(), 5)
     # Journal checkpoints of a --ros run hold no world snapshot (it is on the robot).
     records = [json.loads(line) for line in (tmp_path / "run.jsonl").read_text().splitlines()]
     checkpoints = read_states(records, "checkpoint")

@@ -126,7 +126,8 @@ def test_the_courier_reaches_its_goal_over_ros_with_faults_injected_by_its_serve
     assert done.returncode == 0, done.stderr + robot.text()
     report = json.loads(done.stdout)
     assert report["goal_reached"] and report["actions_failed"] >= 1
-    assert "fault:" in robot.text()  # the servers injected them
+    # The servers injected them (their lines come through the reader thread).
+    assert robot.wait_for(lambda line: "fault:" in line, 10) is not None, robot.text()
     # The journal holds what each step sent and received: goal, feedback, result.
     records = [json.loads(line) for line in journal.read_text().splitlines()]
     written = {

@@ -138,7 +138,9 @@ def test_a_perform_past_its_exec_timeout_aborts_while_the_robot_finishes(robot: 
     start = time.monotonic()
     assert state.execute() == "aborted"
     assert time.monotonic() - start < 4.0
-    assert robot.lines == [f"goal {MOVE}"]
+    # The robot goes on with the move (no cancel); when it ends is its own business.
+    assert robot.lines[:1] == [f"goal {MOVE}"]
+    assert not any(line.startswith(("canceled", "failed")) for line in robot.lines)
 
 
 @pytest.mark.timeout(60)
