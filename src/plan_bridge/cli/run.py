@@ -524,7 +524,7 @@ def _open_journal(
         # The robot's world lives in its process: checkpoints hold no world snapshot.
         run_options["ros"] = robot.prefix
     journal = mission.record(
-        journal_path, header={**run_options, "run": run_options}, append=bool(args.resume)
+        journal_path, header=run_options, exact={"run": run_options}, append=bool(args.resume)
     )
     if args.resume:
         journal.write_raw("resumed", checkpoint=checkpoint is not None)

@@ -100,12 +100,22 @@ class Mission:
     def planner(self) -> Planner:
         return self.executive.planner
 
-    def record(self, path: str, header: dict[str, Any], *, append: bool = False) -> Journal:
+    def record(
+        self,
+        path: str,
+        header: dict[str, Any],
+        *,
+        append: bool = False,
+        exact: dict[str, Any] | None = None,
+    ) -> Journal:
         """Write every event to the journal ``path``, with a checkpoint (the executive's
-        state and the world's snapshot) after every succeeded step."""
+        state and the world's snapshot) after every succeeded step; ``exact`` header
+        entries are written whole (``header``'s are cut like events' values)."""
         from smach.introspection.journal import Journal
 
-        journal = self.journal = Journal(path, self.executive, header=header, append=append)
+        journal = self.journal = Journal(
+            path, self.executive, header=header, exact_header=exact, append=append
+        )
         world = self.world
 
         def write_checkpoint(state: dict[str, Any]) -> None:

@@ -64,8 +64,6 @@ __all__ = [
 DEFAULT_PER_ROBOT = 2
 #: Plans given up for one order (its robots' recovery exhausted) before it fails.
 DEFAULT_ATTEMPTS = 2
-#: Entries of the report's lists of steps and decisions a checkpoint keeps.
-KEPT_IN_CHECKPOINT = 50
 #: Seconds (mission clock) a robot whose step failed past recovery is left out of
 #: plans, so that another robot takes its orders over.
 BENCH_S = 300.0
@@ -452,13 +450,8 @@ class OrderExecutive(Executive):
 
     # -- checkpoints -----------------------------------------------------------------------------
     def snapshot(self) -> dict[str, Any]:
-        """The executive's checkpoint, with the book and the mission's clock. The
-        report's lists of steps and decisions keep their last :data:`KEPT_IN_CHECKPOINT`
-        entries (a day's run would otherwise write them whole at every step)."""
+        """The executive's checkpoint, with the book and the mission's clock."""
         data = super().snapshot()
-        report = data["report"]
-        for key in ("executed", "decisions"):
-            report[key] = report[key][-KEPT_IN_CHECKPOINT:]
         data["orders"] = self.orders.snapshot()
         data["mission"] = {
             "t0": self._t0,

@@ -209,6 +209,22 @@ def _num(value: float) -> str:
     return f"{value:.3f}".rstrip("0").rstrip(".") if value else "0"
 
 
+def _trail_data(trail: Sequence[Sequence[Point]]) -> str:
+    """A trail's path data, :data:`~.world.TRAIL_CHUNK` poses a line: a drive adds to the
+    last line, so successive pictures differ in a few lines."""
+    from plan_bridge.robosim.world import TRAIL_CHUNK
+
+    lines = []
+    for part in trail:
+        if len(part) < 2:
+            continue
+        coords = [f"{_num(x)} {_num(y)}" for x, y in part]
+        for start in range(0, len(coords), TRAIL_CHUNK):
+            head = "M " if start == 0 else "L "
+            lines.append(head + " L ".join(coords[start : start + TRAIL_CHUNK]))
+    return "\n".join(lines)
+
+
 def _pts(points: Sequence[Point]) -> str:
     return " ".join(f"{_num(x)},{_num(y)}" for x, y in points)
 
@@ -268,11 +284,7 @@ def svg_text(scene: Scene, title: str, *, final: bool = True) -> str:
             f'r="0.07" fill="{color}" vector-effect="non-scaling-stroke"><title>{escape(name)}</title></circle>'
         )
     for robot in scene.robots:
-        d = " ".join(
-            "M " + " L ".join(f"{_num(x)} {_num(y)}" for x, y in part)
-            for part in robot.trail
-            if len(part) > 1
-        )
+        d = _trail_data(robot.trail)
         out.append(
             f'<path class="trail" data-robot={quoteattr(robot.name)} stroke="{robot.color}" '
             f'vector-effect="non-scaling-stroke" d="{d}"><title>{escape(robot.name)}: path driven</title></path>'

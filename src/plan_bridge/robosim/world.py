@@ -48,7 +48,7 @@ from plan_bridge.robosim.loading import load_world_file, quiet_stdout
 if TYPE_CHECKING:
     from plan_bridge.planning.types import PlanStep
 
-__all__ = ["ACTION_SECONDS", "ActionResult", "RobosimWorld"]
+__all__ = ["ACTION_SECONDS", "TRAIL_CHUNK", "TRAIL_POINTS", "ActionResult", "RobosimWorld"]
 
 #: Simulated seconds of the actions that are not drives (as in the domain).
 ACTION_SECONDS = {
@@ -61,6 +61,11 @@ ACTION_SECONDS = {
 }
 #: The robot actions that get seeded ExecutionOptions (faults).
 FAULTY = ("navigate", "pick", "place", "detect", "open", "close", "charge")
+#: Poses a robot's trail keeps (about; the newest): a mission's drives whole, the last
+#: part of a day's.
+TRAIL_POINTS = 3000
+#: Poses of a trail drawn on one line of a picture (and dropped together).
+TRAIL_CHUNK = 40
 
 
 @dataclass(frozen=True)
@@ -520,6 +525,17 @@ class RobosimWorld:
                 trail[-1].extend(xy[1:])
             else:
                 trail.append(xy)
+            # A day's drives would make pictures and checkpoints grow without end: the
+            # trail keeps about the robot's last TRAIL_POINTS poses, dropped in whole
+            # chunks of TRAIL_CHUNK (a picture draws a trail a chunk a line: the lines
+            # kept stay the same, and a journal writes a picture's changed lines only).
+            extra = sum(len(part) for part in trail) - TRAIL_POINTS
+            while extra > 0 and trail:
+                cut = -(-extra // TRAIL_CHUNK) * TRAIL_CHUNK
+                if len(trail[0]) - cut >= 2:
+                    del trail[0][:cut]
+                    break
+                extra -= len(trail.pop(0))
 
     # -- the viewer's picture (a "scene" event; plan_bridge.execution.events.WorldScenes) --
     on_scene: Callable[[str], object] | None = None

@@ -59,6 +59,7 @@ from smach.introspection.events import CaptureListener
 from smach.introspection.journal_lines import ENCODER, capture_record, event_record
 from smach.introspection.journal_structures import MachineTracker
 from smach.introspection.journal_writer import JournalWriter
+from smach.introspection.scene_changes import SceneText
 from smach.introspection.structure import snapshot
 from smach.introspection.summary import MAX_DEPTH, MAX_ITEMS, MAX_REPR, summarise
 from smach.state import State
@@ -89,6 +90,9 @@ class Journal(CaptureListener):
     ``flush_interval`` and ``max_interval`` (seconds) bound how often the writer
     thread looks for queued events: see the module documentation for the durability
     contract. Attach it to a tree by passing ``root``, or with ``add_listener``.
+    ``header`` entries are summarised like events' values (long strings and lists are
+    cut); ``exact_header`` entries (JSON data) are written as they are, for what a
+    reader needs back whole.
     """
 
     def __init__(
@@ -97,6 +101,7 @@ class Journal(CaptureListener):
         root: State | None = None,
         *,
         header: Mapping[str, Any] | None = None,
+        exact_header: Mapping[str, Any] | None = None,
         append: bool = False,
         flush_interval: float = 0.005,
         max_interval: float = 0.02,
@@ -122,6 +127,8 @@ class Journal(CaptureListener):
                 known = {node.path for node in tree.walk()}
                 head["structure"] = tree.to_dict()
             head.update({k: summarise(v) for k, v in (header or {}).items()})
+            # What a reader needs back exactly (a run's options: a resume reads them).
+            head.update(exact_header or {})
         self._writer = JournalWriter(
             file,
             f"smach-journal {self.path.name}",
@@ -282,6 +289,7 @@ def read_journal(path: str | os.PathLike[str]) -> tuple[dict[str, Any], list[dic
     """(header, records) of a journal; a torn last line (crash mid-write) is skipped."""
     header: dict[str, Any] = {}
     records: list[dict[str, Any]] = []
+    scenes = SceneText()  # scenes are written as changes: given back whole
     with Path(path).open(encoding="utf-8") as f:
         for number, line in enumerate(f, 1):
             if not line.strip():
@@ -295,5 +303,5 @@ def read_journal(path: str | os.PathLike[str]) -> tuple[dict[str, Any], list[dic
             if number == 1 and record.get("kind") == "header":
                 header = record
             else:
-                records.append(record)
+                records.append(scenes.record(record))
     return header, records

@@ -395,6 +395,7 @@ def lines_of(
     known: set[str] | None,
     new_path: Callable[[str], str | None],
     structure: Callable[[StructureItem], str],
+    rewrite: Callable[[Capture], Capture] | None = None,
 ) -> tuple[str, int]:
     """The JSON lines of queued items, in order, and how many of them are events.
 
@@ -408,7 +409,8 @@ def lines_of(
     _ENTERED), their times formatted in one C call for the whole batch: several times
     cheaper than building and encoding a record. Such a line is the one :func:`line_of`
     writes. Any other item, or any surprise (a value that is not a short string, a
-    time that is not a finite float), takes :func:`line_of`.
+    time that is not a finite float), takes :func:`line_of`, after ``rewrite`` (the
+    writer's scenes as changes: :mod:`~smach.introspection.scene_changes`).
     """
     template: list[str] = []
     args: list[Any] = []
@@ -432,7 +434,7 @@ def lines_of(
                 args.extend(step[1])
                 others -= len(item) - 1  # several events in one item
             else:  # one by one
-                text, events = lines_of(list(item), known, new_path, structure)
+                text, events = lines_of(list(item), known, new_path, structure, rewrite)
                 others -= events - 1
                 timed("%s")
                 arg(text)
@@ -450,7 +452,7 @@ def lines_of(
             parts = None
         if parts is None:  # the general path
             timed("%s")
-            arg(line_of(item))
+            arg(line_of(item if rewrite is None else rewrite(item)))
         else:
             timed(_TIMED)
             arg(parts[-2])

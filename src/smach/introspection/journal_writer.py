@@ -25,6 +25,7 @@ from typing import IO, Any
 
 from smach.introspection.journal_lines import StructureItem, line_of, lines_of
 from smach.introspection.journal_structures import read_tree, resolve
+from smach.introspection.scene_changes import SceneChanges
 from smach.log import loggers
 from smach.state import State
 
@@ -81,6 +82,8 @@ class JournalWriter:
         self.batches = 0
         self.events = 0  # events written
         self.pid = os.getpid()
+        #: Scenes written as what changed since the last one (scene_changes).
+        self.scenes = SceneChanges()
         self.thread = threading.Thread(target=self._run, name=name, daemon=True)
 
     # -- the thread ---------------------------------------------------------------------
@@ -107,7 +110,9 @@ class JournalWriter:
     def format(self, batch: list[Any]) -> tuple[bytes, int]:
         """Step 3: the text of ``batch`` and how many events it holds."""
         known = self.known if self.root is not None else None
-        text, events = lines_of(batch, known, self._unknown_path, self._structure_line)
+        text, events = lines_of(
+            batch, known, self._unknown_path, self._structure_line, self.scenes.capture
+        )
         return text.encode("utf-8"), events
 
     def write(self, data: bytes) -> None:

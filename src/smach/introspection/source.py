@@ -38,6 +38,7 @@ from smach.introspection.events import Capture, CaptureListener
 from smach.introspection.journal import capture_record, summarise
 from smach.introspection.journal_lines import StructureItem
 from smach.introspection.journal_structures import MachineTracker
+from smach.introspection.scene_changes import SceneText
 from smach.introspection.structure import snapshot
 from smach.state import State
 
@@ -241,6 +242,7 @@ class JournalSource:
         self._header: dict[str, Any] = {}
         self._buffered: list[dict[str, Any]] = []
         self._line = 0
+        self._scenes = SceneText()  # scenes are written as changes: given back whole
         first = self._read()
         if first and first[0].get("kind") == "header":
             self._header = first.pop(0)
@@ -273,7 +275,7 @@ class JournalSource:
             except json.JSONDecodeError as exc:
                 raise ValueError(f"{self.path}:{self._line}: not a JSON line ({exc})") from None
             if isinstance(record, dict):
-                records.append(record)
+                records.append(self._scenes.record(record))
         return records
 
     def poll(self) -> list[dict[str, Any]]:

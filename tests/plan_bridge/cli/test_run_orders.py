@@ -62,3 +62,19 @@ def test_the_journal_of_a_run_of_orders_holds_each_order_change(
     done = [r for r in changes if r["status"] == "done"]
     assert all(r["latency"] is not None and r["arrived"] is not None for r in done)
     assert records[-1]["kind"] == "summary" and records[-1]["orders"]["refused"] == 2
+
+
+def test_a_journal_keeps_a_long_goal_whole_for_a_resume(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from smach.introspection.journal import read_journal
+
+    goal = " ".join(f"(lies p{n} {room})" for n in (1, 2, 3) for room in ("west",))
+    goal = f"{goal} {' '.join('(in ann west)' for _ in range(12))}"
+    assert len(goal) > 200  # (longer than an event's value is kept)
+    journal = tmp_path / "run.jsonl"
+    code = main(["run", str(COURIERS), "--goal", goal, "--journal", str(journal), "--quiet"])
+    capsys.readouterr()
+    assert code == 0
+    header, _ = read_journal(journal)
+    assert header["run"]["goal"] == goal

@@ -128,3 +128,19 @@ def test_trails_are_kept_in_the_world_snapshot(test_world_file: Path) -> None:
     older = {k: v for k, v in saved.items() if k != "trails"}
     other.restore(older)
     assert other.trails == {"robot": []}
+
+
+def test_a_trail_keeps_the_newest_poses_of_a_long_day(test_world_file: Path) -> None:
+    from types import SimpleNamespace
+
+    from plan_bridge.robosim.world import TRAIL_POINTS
+
+    world = RobosimWorld(test_world_file, seed=1)
+    robot = SimpleNamespace(name="robot")
+    for leg in range(TRAIL_POINTS // 50 + 10):  # legs of 100 poses, each apart from the last
+        start = leg * 1000.0
+        world.record_drive(robot, [SimpleNamespace(x=start + i, y=0.0) for i in range(100)])
+    parts = world.trails["robot"]
+    assert sum(len(part) for part in parts) == TRAIL_POINTS
+    assert parts[-1][-1] == [start + 99, 0.0]  # the newest pose is kept
+    assert all(len(part) >= 2 for part in parts)
