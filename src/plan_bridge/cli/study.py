@@ -10,7 +10,13 @@ from typing import Any
 
 from plan_bridge.cli.base import EXIT_OK, Command, fail
 from plan_bridge.study.report import authoring_cost, fault_model, write_report
-from plan_bridge.study.runs import APPROACHES, DEFAULT_APPROACHES, RunSpec, inapplicable
+from plan_bridge.study.runs import (
+    APPROACHES,
+    DEFAULT_APPROACHES,
+    RunSpec,
+    inapplicable,
+    orders_file,
+)
 from plan_bridge.study.schedule import read_results, run_study
 
 
@@ -43,6 +49,13 @@ def _configure(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--variant", default="", help="a world variant the domains support, e.g. 'unanticipated'"
+    )
+    parser.add_argument(
+        "--orders",
+        default="",
+        metavar="NAMES",
+        help="comma-separated orders files to serve instead of the goal: names of each "
+        "folder's orders/NAME.yaml (or paths), e.g. steady,rush (docs/orders.md)",
     )
     parser.add_argument(
         "--out", default="study-results", help="output folder (default study-results)"
@@ -81,12 +94,20 @@ def _run_command(args: argparse.Namespace) -> int:
         seeds = [int(s) for s in args.seeds.split(",")] if args.seeds else list(range(args.runs))
     except ValueError:
         return fail(f"--seeds must be comma-separated integers, got {args.seeds!r}")
-    skipped = _left_out(args, approaches)
+    streams = [name.strip() for name in args.orders.split(",") if name.strip()] or [""]
+    for target in args.targets:
+        for name in filter(None, streams):
+            try:
+                orders_file(str(target), name)
+            except ValueError as exc:
+                return fail(str(exc))
+    skipped = _left_out(args, approaches, serves_orders=streams != [""])
     if isinstance(skipped, int):
         return skipped
     specs = [
-        RunSpec(str(t), a, r, s, args.problem, args.variant)
+        RunSpec(str(t), a, r, s, args.problem, args.variant, o)
         for t in args.targets
+        for o in streams
         for a in approaches
         if a not in skipped.get(str(t), [])
         for r in args.fault_rates
@@ -101,8 +122,9 @@ def _run_command(args: argparse.Namespace) -> int:
         )
     total_runs = len(specs)
     executor = f"Dask cluster {args.cluster}" if args.cluster else f"{jobs} local workers"
+    each = f" x {len(streams)} orders files" if streams != [""] else ""
     print(
-        f"plan-bridge study: {total_runs} runs ({len(args.targets)} targets x {len(approaches)} approaches x {len(args.fault_rates)} fault rates x {len(seeds)} seeds), {executor}, results in {out}/",
+        f"plan-bridge study: {total_runs} runs ({len(args.targets)} targets{each} x {len(approaches)} approaches x {len(args.fault_rates)} fault rates x {len(seeds)} seeds), {executor}, results in {out}/",
         file=sys.stderr,
         flush=True,
     )
@@ -151,9 +173,14 @@ def _refused_options(args: argparse.Namespace, approaches: list[str]) -> int | N
     return None
 
 
-def _left_out(args: argparse.Namespace, approaches: list[str]) -> dict[str, list[str]] | int:
+def _left_out(
+    args: argparse.Namespace, approaches: list[str], *, serves_orders: bool = False
+) -> dict[str, list[str]] | int:
     """Target -> the approaches that do not apply to it (each said on stderr), or the
-    exit code when a target does not load or lacks the scripted baseline asked for."""
+    exit code when a target does not load or lacks the scripted baseline asked for (with
+    ``serves_orders``: one that serves orders files, ``scripted(..., orders=FILE)``)."""
+    import inspect
+
     from plan_bridge.errors import PlanBridgeError
     from plan_bridge.missions.mission import load_target
 
@@ -164,6 +191,18 @@ def _left_out(args: argparse.Namespace, approaches: list[str]) -> dict[str, list
             if "scripted" in approaches and not hasattr(loaded.module, "scripted"):
                 return fail(
                     f"{target}: no scripted baseline (scripted() in the domain's Python); drop 'scripted' from --approaches"
+                )
+            baseline = (
+                getattr(loaded.module, "scripted", None) if "scripted" in approaches else None
+            )
+            if (
+                serves_orders
+                and baseline is not None
+                and "orders" not in inspect.signature(baseline).parameters
+            ):
+                return fail(
+                    f"{target}: its scripted baseline serves no orders files (scripted() has "
+                    "no orders= parameter); drop 'scripted' from --approaches"
                 )
             for approach in approaches:
                 reason = inapplicable(approach, loaded.task)
@@ -179,9 +218,10 @@ def _progress(done: int, total: int, spec: RunSpec, row: dict[str, Any], elapsed
     width = 24
     filled = int(width * done / total)
     eta = elapsed / done * (total - done)
+    orders = f" orders {spec.orders}" if spec.orders else ""
     print(
         f"\r[{'#' * filled}{'.' * (width - filled)}] {done}/{total} "
-        f"{Path(spec.target).name} {spec.approach} p={spec.fault_rate:g} seed {spec.seed}: "
+        f"{Path(spec.target).name}{orders} {spec.approach} p={spec.fault_rate:g} seed {spec.seed}: "
         f"{row['outcome']} ETA {eta:4.0f} s   ",
         end="" if done < total else "\n",
         file=sys.stderr,

@@ -20,16 +20,29 @@ author anticipates, built from these states:
 
 The machines share the userdata keys ``blocked`` (hallways known impassable) and
 ``legs`` (the legs driven, for reports).
+
+For a stream of orders dispatched by hand (``domains/robosim_hospital/scripted.py``):
+:func:`read_order_goal` reads an order's goal as the planned mission does,
+:func:`deliveries_of` its deliveries, :func:`whereabouts` says where an object is now,
+:class:`ClockSignal` lets a dispatcher and the robots' machines wait for each other on
+the world's clock, and :class:`OrderLedger` keeps the orders in an
+:class:`~plan_bridge.orders.book.OrderBook` and gives the figures of a planned order
+mission (:meth:`OrderExecutive.figures <plan_bridge.orders.order_executive.OrderExecutive.figures>`).
 """
 
 from __future__ import annotations
 
 import itertools
-from collections.abc import Iterable
+import re
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import smach
 from plan_bridge.execution.compile import TurnTakingConcurrence as ClockConcurrence
+from plan_bridge.orders.book import OrderBook
+from plan_bridge.pddl.task import Fact, format_fact
 from plan_bridge.robosim.skills import skill_for
 from plan_bridge.robosim.world import RobosimWorld
 
@@ -38,15 +51,21 @@ __all__ = [
     "RESERVE",
     "Act",
     "CheckBattery",
+    "ClockSignal",
+    "Delivery",
     "Drive",
+    "OrderLedger",
     "SkillState",
     "TurnTakingConcurrence",
     "charger_spot",
     "deliver",
+    "deliveries_of",
     "go_to",
     "locked_halls",
+    "read_order_goal",
     "route",
     "route_length",
+    "whereabouts",
 ]
 
 #: Tries of one drive leg or action before a state gives up.
@@ -251,33 +270,44 @@ def _machine(*outcomes: str) -> smach.StateMachine:
 
 
 def deliver(
-    world: RobosimWorld, robot: str, item: str, target: str, charger: str | None = None
+    world: RobosimWorld,
+    robot: str,
+    item: str,
+    target: str,
+    charger: str | None = None,
+    *,
+    source: str | None = None,
+    holding: bool = False,
 ) -> smach.StateMachine:
     """``GO_TO_OBJECT -> OPEN -> PICK -> GO_TO_TARGET -> PLACE``: carry ``item`` to spawn
-    ``target``; outcomes ``done``, ``aborted``, ``preempted``."""
+    ``target``; outcomes ``done``, ``aborted``, ``preempted``. ``source``: the place the
+    object lies at now (default: where the world file put it); ``holding``: the robot
+    holds it already (the machine starts at ``GO_TO_TARGET``)."""
     model = world.model
-    source = model.item_place(item)
-    if source is None:
-        raise ValueError(f"{item} is held at the start: nothing to carry")
-    location = model.places[source].fixture or ""
+    if source is None and not holding:
+        source = model.item_place(item)
+        if source is None:
+            raise ValueError(f"{item} is held at the start: nothing to carry")
     target_location = model.places[target].fixture or ""
     sm = _machine("done", "aborted")
     with sm:
-        smach.StateMachine.add(
-            "GO_TO_OBJECT",
-            go_to(world, robot, source, charger),
-            {"arrived": "OPEN", "failed": "aborted"},
-        )
-        smach.StateMachine.add(
-            "OPEN",
-            Act(world, robot, "open", location, source),
-            {"done": "PICK", "failed": "aborted"},
-        )
-        smach.StateMachine.add(
-            "PICK",
-            Act(world, robot, "pick", item, source, location),
-            {"done": "GO_TO_TARGET", "failed": "aborted"},
-        )
+        if not holding and source is not None:
+            location = model.places[source].fixture or ""
+            smach.StateMachine.add(
+                "GO_TO_OBJECT",
+                go_to(world, robot, source, charger),
+                {"arrived": "OPEN", "failed": "aborted"},
+            )
+            smach.StateMachine.add(
+                "OPEN",
+                Act(world, robot, "open", location, source),
+                {"done": "PICK", "failed": "aborted"},
+            )
+            smach.StateMachine.add(
+                "PICK",
+                Act(world, robot, "pick", item, source, location),
+                {"done": "GO_TO_TARGET", "failed": "aborted"},
+            )
         smach.StateMachine.add(
             "GO_TO_TARGET",
             go_to(world, robot, target, charger),
@@ -335,3 +365,133 @@ class TurnTakingConcurrence(ClockConcurrence):
     ) -> None:
         super().__init__(world.clock, list(outcomes), default_outcome, **options)
         self.world = world
+
+
+# -- orders dispatched by hand -------------------------------------------------------------
+@dataclass(frozen=True)
+class Delivery:
+    """An object to bring to a spawn: a goal atom ``(At OBJECT SPAWN)`` (``target`` is
+    the spawn's place)."""
+
+    item: str
+    target: str
+
+
+def read_order_goal(world: RobosimWorld, folder: Path, text: str) -> list[Fact]:
+    """An order's goal read as the planned mission reads it: the name of a goal of the
+    folder's goals.yaml, or atoms in pyrobosim's vocabulary. Raises
+    :class:`~plan_bridge.errors.PlanBridgeError` saying what is wrong."""
+    from plan_bridge.errors import PlanBridgeError
+    from plan_bridge.maps.goals import parse_goal
+    from plan_bridge.pddl.constructs import did_you_mean
+    from plan_bridge.robosim.target_files import read_goals
+
+    word = text.strip()
+    if re.fullmatch(r"[A-Za-z][A-Za-z0-9_-]*", word):
+        goals = read_goals(folder)
+        if word not in goals:
+            raise PlanBridgeError(
+                f"{word}: not a goal atom such as (At apple0 table0_tabletop), nor the name of "
+                f"a goal{did_you_mean(word, goals)}; goals of {folder}/goals.yaml: "
+                + ", ".join(goals)
+            )
+        word = goals[word]
+    return parse_goal(word, world.model)
+
+
+def deliveries_of(world: RobosimWorld, atoms: Sequence[Fact]) -> list[Delivery]:
+    """The deliveries of a goal of ``(At OBJECT SPAWN)`` atoms (``(Has LOCATION
+    OBJECT)`` of a location with one spawn too). Raises ``ValueError`` naming an atom
+    that is not a delivery."""
+    model = world.model
+    found: list[Delivery] = []
+    for atom in atoms:
+        name, *args = atom
+        item = target = ""
+        if name == "at" and len(args) == 2 and world.name(args[0]) in model.items:
+            item, target = world.name(args[0]), world.name(args[1])
+        elif name == "has" and len(args) == 2 and world.name(args[1]) in model.items:
+            places = model.spawn_places(world.name(args[0]))
+            item, target = world.name(args[1]), places[0] if len(places) == 1 else ""
+        if not item or target not in model.places or not model.places[target].is_spawn:
+            raise ValueError(
+                f"{format_fact(atom)}: the script delivers objects to spawns: (At OBJECT SPAWN)"
+            )
+        found.append(Delivery(item, target))
+    return found
+
+
+def whereabouts(world: RobosimWorld, item: str) -> tuple[str | None, str | None]:
+    """Where ``item`` is now: (the place of the spawn it lies on, the robot holding it);
+    (None, None) when it is nowhere (an event took it away)."""
+    obj = world.sim.get_object_by_name(item)
+    if obj is None:
+        return None, None
+    for robot in world.sim.robots:
+        if robot.manipulated_object is obj:
+            return None, str(robot.name)
+    spawn = obj.parent
+    return (None if spawn is None else world.model.spawn_place(spawn.name)), None
+
+
+class ClockSignal:
+    """News between the participants of the world's clock (a dispatcher and the robots'
+    machines in a :class:`TurnTakingConcurrence`): :meth:`wait` gives up the turn until
+    :meth:`notify` or, when given, a time of the world's clock, whichever comes first.
+    Only one participant runs at a time, so whatever a waiter looked at before waiting
+    is still so when it waits: no news is missed."""
+
+    def __init__(self, world: RobosimWorld) -> None:
+        self.clock = world.clock
+        self.condition = world.clock.condition()
+
+    def wait(self, until: float | None = None) -> None:
+        if not self.clock.taking_part():  # a thread of its own: it moves the clock itself
+            if until is not None:
+                self.clock.sleep_until(until)
+            return
+        with self.condition:
+            self.condition.wait_until(until)
+
+    def notify(self) -> None:
+        with self.condition:
+            self.condition.notify_all()
+
+
+class OrderLedger:
+    """The orders of a mission dispatched by hand, in an
+    :class:`~plan_bridge.orders.book.OrderBook` (``orders``) on the world's clock
+    (seconds since the ledger was made), with each robot's seconds at work
+    (``busy_s``): :meth:`figures` are those of a planned order mission."""
+
+    def __init__(self, world: RobosimWorld, orders: OrderBook, robots: Iterable[str]) -> None:
+        self.world = world
+        self.orders = orders
+        self.robots = tuple(robots)
+        self.busy_s: dict[str, float] = {}
+        self.t0 = world.now()
+        self.elapsed_s = 0.0
+        """The mission's clock at its end (set by :meth:`close`)."""
+
+    def now(self) -> float:
+        """The mission's clock: seconds of the world's clock since the ledger was made."""
+        return self.world.now() - self.t0
+
+    def worked(self, robot: str, seconds: float) -> None:
+        """``robot`` spent ``seconds`` on an order."""
+        self.busy_s[robot] = self.busy_s.get(robot, 0.0) + max(0.0, seconds)
+
+    def close(self) -> None:
+        """The mission ended now."""
+        self.elapsed_s = self.now()
+
+    def figures(self) -> dict[str, Any]:
+        """The book's summary (counts, latency p50/p95, orders done per hour) and each
+        robot's share of the mission's time at work, as a planned order mission's."""
+        data = self.orders.summary(self.elapsed_s)
+        if self.elapsed_s > 0:
+            data["busy_share"] = {
+                robot: round(self.busy_s.get(robot, 0.0) / self.elapsed_s, 4)
+                for robot in sorted(self.robots)
+            }
+        return data

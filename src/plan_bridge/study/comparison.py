@@ -1,7 +1,7 @@
 """Approaches compared with a reference approach, cell by cell, with intervals and p-values.
 
-A *cell* is (target, variant, fault rate). In each cell every approach is compared
-with the reference (``planned`` by default) on three metrics:
+A *cell* is (target, variant, orders file, fault rate). In each cell every approach is
+compared with the reference (``planned`` by default) on three metrics:
 
 - success rate: both rates with Wilson intervals, the difference with Newcombe's
   interval, Fisher's exact test;
@@ -10,6 +10,10 @@ with the reference (``planned`` by default) on three metrics:
   compared (a failed run stops early, so its time is not the cost of the mission);
   the success rate comparison above is what accounts for the failures. Where either
   approach has no successful run the comparison is "n/a".
+
+A cell of runs that served an orders file is compared on the order metrics of
+:mod:`~plan_bridge.study.order_streams` too (share of orders done, latency p50 and p95,
+orders per hour, distance: every run counts).
 
 p-values are two-sided; ``p_holm`` adjusts them with Holm's method over the whole
 table (every metric, cell and approach), for a reader who wants one family.
@@ -21,6 +25,7 @@ from collections import defaultdict
 from collections.abc import Iterable
 from typing import Any
 
+from plan_bridge.study.order_streams import order_comparisons
 from plan_bridge.study.runs import cell_number
 from plan_bridge.study.statistics import (
     fisher_exact,
@@ -66,14 +71,19 @@ def compare_approaches(
     rows: Iterable[dict[str, str]], reference: str = "planned"
 ) -> list[dict[str, Any]]:
     """One row per (cell, approach other than ``reference``, metric)."""
-    cells: dict[tuple[str, str, float], dict[str, list[dict[str, str]]]] = defaultdict(
+    cells: dict[tuple[str, str, str, float], dict[str, list[dict[str, str]]]] = defaultdict(
         lambda: defaultdict(list)
     )
     for row in rows:
-        cell = (row["target"], row["variant"], cell_number(row["fault_rate"]))
+        cell = (
+            row["target"],
+            row["variant"],
+            row.get("orders") or "",
+            cell_number(row["fault_rate"]),
+        )
         cells[cell][row["approach"]].append(row)
     out: list[dict[str, Any]] = []
-    for (target, variant, rate), by_approach in sorted(cells.items()):
+    for (target, variant, orders, rate), by_approach in sorted(cells.items()):
         ref_rows = by_approach.get(reference)
         if not ref_rows:
             continue
@@ -83,6 +93,7 @@ def compare_approaches(
             base = {
                 "target": target,
                 "variant": variant,
+                "orders": orders,
                 "fault_rate": rate,
                 "reference": reference,
                 "approach": approach,
@@ -124,6 +135,8 @@ def compare_approaches(
                         "p": result["p"],
                     }
                 )
+            if orders:
+                out += [{**base, **c} for c in order_comparisons(ref_rows, other_rows)]
     tested = [i for i, c in enumerate(out) if isinstance(c["p"], float)]
     adjusted = holm([out[i]["p"] for i in tested])
     for c in out:

@@ -14,7 +14,8 @@ from collections import defaultdict
 from pathlib import Path
 from typing import Any
 
-from plan_bridge.study.runs import APPROACHES, cell_number
+from plan_bridge.study.order_streams import draw_order_figure
+from plan_bridge.study.runs import APPROACHES, cell_label, cell_number
 
 __all__ = ["DPI", "Figure", "draw_figures"]
 
@@ -36,8 +37,12 @@ def _order(approaches: set[str]) -> list[str]:
     return sorted(approaches, key=lambda a: (known.index(a) if a in known else 99, a))
 
 
-def _panel_title(target: str, variant: str) -> str:
-    return f"{target} ({variant})" if variant else target
+Cell = tuple[str, str, str]
+"""(target, variant, orders file): a column of panels."""
+
+
+def _cell(row: dict[str, Any]) -> Cell:
+    return (row["target"], row["variant"], row.get("orders") or "")
 
 
 def draw_figures(
@@ -61,12 +66,16 @@ def draw_figures(
         a: {"color": f"C{i % 10}", "marker": MARKERS[i % len(MARKERS)]}
         for i, a in enumerate(approaches)
     }
-    targets = sorted({(s["target"], s["variant"]) for s in summary})
-    return [
+    targets = sorted({_cell(s) for s in summary})
+    figures = [
         _success(summary, targets, approaches, style, out),
         _times(rows, targets, approaches, style, out),
         _planning(summary, rows, approaches, style, out),
     ]
+    drawn = draw_order_figure(rows, out, style)
+    if drawn is not None:
+        figures.append(Figure(*drawn))
+    return figures
 
 
 def _save(fig: Any, out: Path, stem: str) -> None:
@@ -97,7 +106,7 @@ def _offsets(count: int, spread: float) -> list[float]:
 
 def _success(
     summary: list[dict[str, Any]],
-    targets: list[tuple[str, str]],
+    targets: list[Cell],
     approaches: list[str],
     style: dict[str, dict[str, str]],
     out: Path,
@@ -111,12 +120,12 @@ def _success(
         1, len(targets), figsize=(4.4 * len(targets), 3.6), squeeze=False, sharey=True
     )
     handles: dict[str, Any] = {}
-    for ax, (target, variant) in zip(axes[0], targets, strict=True):
+    for ax, cell in zip(axes[0], targets, strict=True):
         for approach in approaches:
             pts = sorted(
                 (s["fault_rate"], s["success_rate"], s["ci_low"], s["ci_high"])
                 for s in summary
-                if s["target"] == target and s["variant"] == variant and s["approach"] == approach
+                if _cell(s) == cell and s["approach"] == approach
             )
             if not pts:
                 continue
@@ -126,7 +135,7 @@ def _success(
             handles[approach] = ax.errorbar(
                 xs, ys, yerr=err, capsize=2, linewidth=1, markersize=4, **style[approach]
             )
-        ax.set_title(_panel_title(target, variant), fontsize=10)
+        ax.set_title(cell_label(*cell), fontsize=10)
         ax.set_xlabel("fault rate")
         ax.set_xticks(rates)
         ax.set_ylim(-4, 104)
@@ -148,7 +157,7 @@ def _success(
 
 def _times(
     rows: list[dict[str, str]],
-    targets: list[tuple[str, str]],
+    targets: list[Cell],
     approaches: list[str],
     style: dict[str, dict[str, str]],
     out: Path,
@@ -161,10 +170,10 @@ def _times(
     fig, axes = plt.subplots(
         2, len(targets), figsize=(4.4 * len(targets), 6.4), squeeze=False, sharex=True
     )
-    for col, (target, variant) in enumerate(targets):
+    for col, target in enumerate(targets):
         cell: dict[tuple[str, float], list[dict[str, str]]] = defaultdict(list)
         for r in rows:
-            if r["target"] == target and r["variant"] == variant:
+            if _cell(r) == target:
                 cell[(r["approach"], cell_number(r["fault_rate"]))].append(r)
         for row_i, (column, ylabel) in enumerate(
             (("sim_time_s", "simulated robot time (s)"), ("wall_time_s", "wall time (s, log)"))
@@ -208,7 +217,7 @@ def _times(
                     ax.set_yscale("log")
                 ax.set_xlabel("fault rate")
             else:
-                ax.set_title(_panel_title(target, variant), fontsize=10)
+                ax.set_title(cell_label(*target), fontsize=10)
             ax.set_xticks(range(len(rates)), [f"{r:g}" for r in rates])
             ax.grid(alpha=0.3)
     handles = [

@@ -20,7 +20,14 @@ from typing import Any
 from plan_bridge.study.comparison import compare_approaches, format_p
 from plan_bridge.study.environment import PLANNER_PACKAGES, read_sessions
 from plan_bridge.study.figures import draw_figures
-from plan_bridge.study.runs import APPROACHES, TEMPORAL_TIME_SCALE, cell_number, target_of
+from plan_bridge.study.order_streams import order_section, summarise_orders
+from plan_bridge.study.runs import (
+    APPROACHES,
+    TEMPORAL_TIME_SCALE,
+    cell_label,
+    cell_number,
+    target_of,
+)
 from plan_bridge.study.statistics import median_ci, wilson
 
 __all__ = ["authoring_cost", "fault_model", "summarise_results", "wilson", "write_report"]
@@ -29,13 +36,12 @@ NA = "n/a"
 
 
 def summarise_results(rows: Iterable[dict[str, str]]) -> list[dict[str, Any]]:
-    groups: dict[tuple[str, str, str, float], list[dict[str, str]]] = defaultdict(list)
+    groups: dict[tuple[str, str, str, str, float], list[dict[str, str]]] = defaultdict(list)
     for row in rows:
-        groups[
-            (row["target"], row["variant"], row["approach"], cell_number(row["fault_rate"]))
-        ].append(row)
+        cell = (row["target"], row["variant"], row.get("orders") or "")
+        groups[(*cell, row["approach"], cell_number(row["fault_rate"]))].append(row)
     summary = []
-    for (target, variant, approach, rate), items in sorted(groups.items()):
+    for (target, variant, orders, approach, rate), items in sorted(groups.items()):
         ok = [r for r in items if r["goal_reached"] == "True"]
         low, high = wilson(len(ok), len(items))
         planning = sum(cell_number(r["planning_time_s"]) for r in items)
@@ -58,6 +64,7 @@ def summarise_results(rows: Iterable[dict[str, str]]) -> list[dict[str, Any]]:
             {
                 "target": target,
                 "variant": variant,
+                "orders": orders,
                 "approach": approach,
                 "fault_rate": rate,
                 "runs": len(items),
@@ -362,16 +369,21 @@ def write_report(
 ) -> Path:
     summary = summarise_results(rows)
     comparisons = compare_approaches(rows)
+    orders = summarise_orders(rows)
     _write_csv(out / "summary.csv", summary)
     _write_csv(out / "comparisons.csv", comparisons)
     _write_csv(out / "authoring.csv", authoring)
+    if orders:
+        _write_csv(out / "orders.csv", orders)
     figures = draw_figures(summary, rows, out)
     lines = [
         "# Scripted vs planned: study report",
         "",
         f"Command: `{command}`",
         "",
-        f"{len(rows)} runs. Success = the goal holds in the simulated world at the end. "
+        f"{len(rows)} runs. Success = the goal holds in the simulated world at the end "
+        "(for a run of an orders file: every order that arrived is done, refused or "
+        "cancelled, none failed or left open). "
         "Intervals are 95%: Wilson for success rates, Newcombe for their differences, "
         "order statistics for medians. Times and steps are over successful runs only "
         "(a failed run stops early); 'n/a' where no run succeeded.",
@@ -402,6 +414,7 @@ def write_report(
             f"{s['planning_share'] * 100:.0f}% | {s['mean_planner_calls']:.2f} | "
             f"{s['mean_replans']:.2f} | {s['mean_repairs']:.2f} |"
         )
+    lines += order_section(orders)
     lines += _comparison_section(comparisons)
     lines += [
         "",
@@ -430,8 +443,9 @@ def write_report(
 
 
 def _cell_name(row: dict[str, Any]) -> str:
-    """The target of a table row, with its variant of the world when it has one."""
-    return f"{row['target']} ({row['variant']})" if row["variant"] else str(row["target"])
+    """The target of a table row, with its variant of the world and its orders file when
+    it has them."""
+    return cell_label(str(row["target"]), row["variant"], row.get("orders") or "")
 
 
 def _comparison_section(comparisons: list[dict[str, Any]]) -> list[str]:
@@ -465,28 +479,39 @@ def _findings(
     summary: list[dict[str, Any]], authoring: list[dict[str, Any]], rows: list[dict[str, str]]
 ) -> list[str]:
     out: list[str] = []
-    by = {(s["target"], s["variant"], s["approach"], s["fault_rate"]): s for s in summary}
-    targets = sorted({(s["target"], s["variant"]) for s in summary})
-    for target, variant in targets:
+    by = {
+        (s["target"], s["variant"], s["orders"], s["approach"], s["fault_rate"]): s for s in summary
+    }
+    targets = sorted({(s["target"], s["variant"], s["orders"]) for s in summary})
+    for target, variant, orders in targets:
         rates = sorted(
-            {s["fault_rate"] for s in summary if s["target"] == target and s["variant"] == variant}
+            {
+                s["fault_rate"]
+                for s in summary
+                if (s["target"], s["variant"], s["orders"]) == (target, variant, orders)
+            }
         )
         if not rates:
             continue
         top = rates[-1]
-        name = f"{target} ({variant})" if variant else target
+        name = cell_label(target, variant, orders)
         parts = []
         for approach in APPROACHES:
-            s = by.get((target, variant, approach, top))
+            s = by.get((target, variant, orders, approach, top))
             if s:
                 parts.append(
                     f"{approach} {s['success_rate'] * 100:.0f}% ({s['ci_low'] * 100:.0f}-{s['ci_high'] * 100:.0f}%)"
                 )
-        out.append(f"- **{name}**, fault rate {top:g}: goal reached by " + ", ".join(parts) + ".")
-        planned = by.get((target, variant, "planned", top))
-        scripted = by.get((target, variant, "scripted", top))
+        what = "every order accounted for (none failed or lost)" if orders else "goal reached"
+        out.append(f"- **{name}**, fault rate {top:g}: {what} by " + ", ".join(parts) + ".")
+        planned = by.get((target, variant, orders, "planned", top))
+        scripted = by.get((target, variant, orders, "scripted", top))
         if planned and scripted:
-            mine = [r for r in rows if r["target"] == target and r["variant"] == variant]
+            mine = [
+                r
+                for r in rows
+                if (r["target"], r["variant"], r.get("orders") or "") == (target, variant, orders)
+            ]
             # A robot's world (it reports distances) keeps its own simulated clock.
             timed = any(_engines(r) & TEMPORAL_ENGINES for r in mine) and not any(
                 r.get("distance_m") for r in mine

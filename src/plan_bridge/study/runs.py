@@ -13,27 +13,44 @@ The planned approaches plan with ``auto``: Fast Downward on classical problems,
 Kairos (then TAMER) on temporal and numeric ones; the ``planner`` column names the
 engine that found the plans. Temporal missions play their timeline at
 :data:`TEMPORAL_TIME_SCALE` wall seconds per plan second.
+
+A run may serve an **orders file** (``RunSpec.orders``: a file of the target folder's
+``orders/``, or a path; see docs/orders.md) instead of the target's goal: the planned
+approaches run the order mission (``MissionOptions.orders``), the scripted one calls the
+domain's ``scripted(task, ..., orders=FILE)``, whose ``extra["orders"]`` accounts for
+the orders as a planned mission does (:class:`OrderAccounts`). The row then holds the
+:data:`ORDER_FIELDS` (:func:`order_columns`), and ``goal_reached`` means that every
+order that arrived is done, refused or cancelled: none failed, none left open.
 """
 
 from __future__ import annotations
 
 import os
 import socket
+import statistics
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, Protocol
+
+if TYPE_CHECKING:
+    from plan_bridge.orders.book import OrderBook
 
 __all__ = [
     "APPROACHES",
     "DEFAULT_APPROACHES",
     "FIELDS",
+    "ORDER_FIELDS",
     "VARYING_FIELDS",
+    "OrderAccounts",
     "RunSpec",
+    "cell_label",
     "cell_number",
     "failure_row",
     "inapplicable",
     "is_temporal",
+    "order_columns",
+    "orders_file",
     "pin_hash_seed",
     "placement",
     "run_one",
@@ -54,10 +71,30 @@ DEFAULT_APPROACHES = tuple(APPROACHES)
 #: first decides what happens, and a run would not be a function of its seed.
 TEMPORAL_TIME_SCALE = 0.01
 
+#: The columns of a run that serves an orders file (empty for the others): orders by
+#: what became of them (``lost``: still open at the end, or never arrived), those done
+#: the moment they arrived (their goal held already), latency (arrival to done) p50 and
+#: p95, orders done per hour of the mission's clock, the robots' mean busy share.
+ORDER_FIELDS = [
+    "orders_arrived",
+    "orders_done",
+    "orders_failed",
+    "orders_refused",
+    "orders_cancelled",
+    "orders_lost",
+    "orders_late",
+    "orders_done_at_arrival",
+    "latency_p50_s",
+    "latency_p95_s",
+    "orders_per_hour",
+    "busy_share",
+]
+
 FIELDS = [
     "target",
     "problem",
     "variant",
+    "orders",
     "approach",
     "fault_rate",
     "seed",
@@ -69,6 +106,7 @@ FIELDS = [
     # percentage points used); empty for the others.
     "distance_m",
     "battery_used",
+    *ORDER_FIELDS,
     "steps",
     "actions_executed",
     "actions_failed",
@@ -124,6 +162,10 @@ def pin_hash_seed() -> None:
     os.environ["PYTHONHASHSEED"] = HASH_SEED
 
 
+#: The columns that name a run, in the order of :attr:`RunSpec.key`.
+KEY_FIELDS = ("target", "problem", "variant", "orders", "approach", "fault_rate", "seed")
+
+
 @dataclass(frozen=True)
 class RunSpec:
     """One run of the study."""
@@ -134,29 +176,90 @@ class RunSpec:
     seed: int
     problem: str = ""
     variant: str = ""
+    orders: str = ""
+    """An orders file to serve (a name of the target folder's ``orders/``, or a path);
+    "": the target's goal."""
 
     @property
-    def key(self) -> tuple[str, str, str, str, str, str]:
+    def key(self) -> tuple[str, str, str, str, str, str, str]:
         return (
             Path(self.target).name,
             self.problem,
             self.variant,
+            self.orders,
             self.approach,
             f"{self.fault_rate:g}",
             str(self.seed),
         )
 
 
+def orders_file(target: str, name: str) -> Path:
+    """The orders file ``name`` of ``target``: ``TARGET/orders/NAME.yaml``, or ``name``
+    itself when it is a file. Raises ``ValueError`` naming the files there are."""
+    from plan_bridge.pddl.constructs import did_you_mean
+
+    given = Path(name)
+    if given.suffix in (".yaml", ".yml") and given.is_file():
+        return given
+    folder = Path(target) / "orders"
+    file = folder / f"{name}.yaml"
+    if file.is_file():
+        return file
+    names = sorted(p.stem for p in folder.glob("*.yaml")) if folder.is_dir() else []
+    raise ValueError(
+        f"{target}: no orders file {name!r}{did_you_mean(name, names)}; the orders files of "
+        f"a target are its orders/NAME.yaml: {', '.join(names) or 'none'} (or give a path)"
+    )
+
+
+class OrderAccounts(Protocol):
+    """What accounts for the orders of a run: the planned mission's
+    :class:`~plan_bridge.orders.order_executive.OrderExecutive`, a scripted mission's
+    ``extra["orders"]`` (e.g. :class:`plan_bridge.robosim.scripting.OrderLedger`)."""
+
+    @property
+    def orders(self) -> OrderBook: ...
+
+    def figures(self) -> dict[str, Any]: ...
+
+
+def order_columns(accounts: OrderAccounts) -> dict[str, Any]:
+    """The :data:`ORDER_FIELDS` of a run from what accounts for its orders."""
+    figures = accounts.figures()
+    states = accounts.orders.states()
+    busy = figures.get("busy_share") or {}
+    open_ = sum(figures.get(status, 0) for status in ("queued", "assigned", "active"))
+
+    def blank(value: Any) -> Any:
+        return "" if value is None else value
+
+    return {
+        "orders_arrived": figures["orders"],
+        "orders_done": figures["done"],
+        "orders_failed": figures["failed"],
+        "orders_refused": figures["refused"],
+        "orders_cancelled": figures["cancelled"],
+        "orders_lost": open_ + figures["not_arrived"],
+        "orders_late": figures["late"],
+        "orders_done_at_arrival": sum(
+            1 for state in states if state.latency is not None and state.latency <= 1e-9
+        ),
+        "latency_p50_s": blank(figures.get("latency_p50_s")),
+        "latency_p95_s": blank(figures.get("latency_p95_s")),
+        "orders_per_hour": blank(figures.get("orders_per_hour")),
+        "busy_share": round(statistics.fmean(busy.values()), 4) if busy else "",
+    }
+
+
+def orders_accounted(columns: dict[str, Any]) -> bool:
+    """Every order that arrived is done, refused or cancelled: none failed, none lost."""
+    return not columns["orders_failed"] and not columns["orders_lost"]
+
+
 def failure_row(spec: RunSpec, outcome: str, error: str, wall_time_s: float) -> dict[str, Any]:
     """The row of a run that did not finish by itself (``timeout``, ``crashed``)."""
     row: dict[str, Any] = dict.fromkeys(FIELDS, "")
-    row.update(
-        zip(
-            ("target", "problem", "variant", "approach", "fault_rate", "seed"),
-            spec.key,
-            strict=True,
-        )
-    )
+    row.update(zip(KEY_FIELDS, spec.key, strict=True))
     row.update(outcome=outcome, goal_reached=False, wall_time_s=round(wall_time_s, 3), error=error)
     return row
 
@@ -183,6 +286,10 @@ def _call_domain(fn: Any, task: Any, spec: RunSpec) -> Any:
         if "variant" not in inspect.signature(fn).parameters:
             raise ValueError(f"{spec.target}: {fn.__name__}() does not support variants")
         kwargs["variant"] = spec.variant
+    if spec.orders:
+        if "orders" not in inspect.signature(fn).parameters:
+            raise ValueError(f"{spec.target}: {fn.__name__}() does not serve orders files")
+        kwargs["orders"] = orders_file(spec.target, spec.orders)
     return fn(task, **kwargs)
 
 
@@ -194,14 +301,7 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
     """
     row: dict[str, Any] = dict.fromkeys(FIELDS, "")
     key = spec.key
-    row.update(
-        target=key[0],
-        problem=key[1],
-        variant=key[2],
-        approach=key[3],
-        fault_rate=key[4],
-        seed=key[5],
-    )
+    row.update(zip(KEY_FIELDS, key, strict=True))
     clock: list[float] = []
     try:
         row.update(_run(spec, clock))
@@ -260,10 +360,14 @@ def _run(spec: RunSpec, clock: list[float]) -> dict[str, Any]:
         began = time.monotonic()
         outcome = machine.execute()
         numbers = world.figures()
+        served = order_columns(baseline.extra["orders"]) if spec.orders else {}
         return {
             **_robot_figures(numbers),
+            **served,
             "outcome": outcome,
-            "goal_reached": bool(world.goal_reached()),
+            "goal_reached": outcome == "succeeded" and orders_accounted(served)
+            if spec.orders
+            else bool(world.goal_reached()),
             "sim_time_s": round((time.monotonic() - began) / TEMPORAL_TIME_SCALE, 1)
             if temporal
             else numbers.get("sim_time_s", 0.0),
@@ -279,6 +383,7 @@ def _run(spec: RunSpec, clock: list[float]) -> dict[str, Any]:
         policy=policy_name,
         time_scale=TEMPORAL_TIME_SCALE if temporal else 0.0,
         variant=spec.variant,
+        orders=str(orders_file(spec.target, spec.orders)) if spec.orders else None,
     )
     mission = prepare_mission(target, options)
     executive = mission.executive
@@ -297,10 +402,24 @@ def _run(spec: RunSpec, clock: list[float]) -> dict[str, Any]:
         sim_time = round((makespan or 0.0) / TEMPORAL_TIME_SCALE, 1)
     decisions = [d["decision"] for d in report.decisions]
     failed = report.actions_failed
+    orders: dict[str, Any] = {}
+    if spec.orders:
+        from plan_bridge.orders.order_executive import OrderExecutive
+
+        assert isinstance(executive, OrderExecutive)
+        orders = order_columns(executive)
+    reached = (
+        outcome == "succeeded" and orders_accounted(orders)
+        if spec.orders
+        else bool(world.goal_reached())
+        if world is not None
+        else report.goal_reached
+    )
     return {
         **_robot_figures(figures),
+        **orders,
         "outcome": outcome,
-        "goal_reached": bool(world.goal_reached()) if world is not None else report.goal_reached,
+        "goal_reached": reached,
         "sim_time_s": sim_time,
         "steps": _count_steps(exits),
         "actions_executed": report.actions_executed,
@@ -334,6 +453,12 @@ def placement(worker: str) -> dict[str, str]:
     from plan_bridge.study.environment import cpu_model
 
     return {"host": socket.gethostname(), "worker": worker, "cpu_model": cpu_model()}
+
+
+def cell_label(target: str, variant: str = "", orders: str = "") -> str:
+    """A cell's name in tables and plots: ``robosim_hospital (doors, orders steady)``."""
+    more = [*([variant] if variant else []), *([f"orders {orders}"] if orders else [])]
+    return f"{target} ({', '.join(more)})" if more else target
 
 
 def cell_number(value: str) -> float:

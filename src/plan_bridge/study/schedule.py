@@ -26,11 +26,13 @@ from plan_bridge.study.runs import FIELDS, RunSpec, failure_row, pin_hash_seed, 
 __all__ = ["read_results", "run_study"]
 
 
-def _row_key(row: dict[str, str]) -> tuple[str, str, str, str, str, str]:
+def _row_key(row: dict[str, str]) -> tuple[str, str, str, str, str, str, str]:
+    """A row's :attr:`RunSpec.key` (a row of an older version has no orders: "")."""
     return (
         row["target"],
         row["problem"],
         row["variant"],
+        row.get("orders") or "",
         row["approach"],
         f"{float(row['fault_rate']):g}",
         row["seed"],

@@ -49,7 +49,7 @@ def test_the_study_summary_shows_planner_calls_replans_and_repairs_per_run(
     from plan_bridge.study.report import summarise_results, write_report
 
     base = {name: "0" for name in FIELDS}
-    base.update(target="rooms", variant="", approach="planned", fault_rate="0.2")
+    base.update(target="rooms", variant="", orders="", approach="planned", fault_rate="0.2")
     base.update(outcome="succeeded", goal_reached="True", wall_time_s="1.0")
     rows = [
         {**base, "seed": "0", "planner_calls": "3", "replans": "2", "repairs": "1"},
