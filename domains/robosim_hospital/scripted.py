@@ -175,16 +175,20 @@ class Assign(_DeskState):
         carried = {d.item for o in desk.jobs.values() if o is not None for d in desk.work[o]}
         if first.item in carried:
             return None  # another robot carries it: the order waits
-        if holder is not None:
-            return holder if desk.jobs[holder] is None else None
         free = [r for r in desk.jobs if desk.world.robot(r).manipulated_object is None]
+        start = place if holder is None else desk.here(holder)
         reach = {r: desk.metres(desk.here(r), place) for r in free}
-        if place is None:
+        if start is None:
             why = f"{first.item} is nowhere to be found"
+        elif desk.metres(start, first.target) == _INF:
+            known = ", ".join(sorted(desk.blocked)) or "none"
+            why = f"no way from {start} to {first.target} (hallways known blocked: {known})"
+        elif holder is not None:
+            return holder if desk.jobs[holder] is None else None
         elif not free:
             why = "every robot's hand is full"
-        elif min(reach.values()) == _INF or desk.metres(place, first.target) == _INF:
-            why = f"no way from a robot to {first.item} and on to {first.target}"
+        elif min(reach.values()) == _INF:
+            why = f"no robot has a way to {first.item}"
         else:
             idle = [r for r in free if desk.jobs[r] is None and reach[r] < _INF]
             return min(idle, key=lambda r: (reach[r], r)) if idle else None

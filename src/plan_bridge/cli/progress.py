@@ -35,7 +35,7 @@ def summary_lines(outcome: str | None, report: Any, faults: int | None) -> list[
     recovery, time, and the reason when the goal was not reached)."""
     reached = "goal reached" if report.goal_reached else "goal NOT reached"
     if getattr(report, "orders", None):
-        reached = "every order done" if report.goal_reached else "NOT every order done"
+        reached = "no order failed" if report.goal_reached else "an order FAILED"
     actions = f"  actions: {report.actions_executed} run, {report.actions_failed} failed" + (
         f"; {_count(faults, 'fault', 'faults')} injected" if faults is not None else ""
     )
