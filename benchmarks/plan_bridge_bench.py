@@ -281,9 +281,9 @@ def chain_task(nodes: int, tag: str = "") -> Any:
 
 def thousand_section(trials: int) -> dict[str, Any]:
     import smach
+    from plan_bridge.belief import Belief
     from plan_bridge.execution.compile import compile_plan
     from plan_bridge.execution.semantics import ActionModel
-    from plan_bridge.execution.world import WorldState
     from plan_bridge.planning.planner import PlanStep
     from plan_bridge.skills.registry import SkillRegistry
 
@@ -302,7 +302,7 @@ def thousand_section(trials: int) -> dict[str, Any]:
     compile_times, execute_times = [], []
     for _ in range(trials):
         model = ActionModel(task)  # fresh: grounding the 1000 steps is part of compiling
-        belief = WorldState(task.initial_facts)
+        belief = Belief(task.initial_facts)
         started = time.perf_counter()
         compiled = compile_plan(plan, skills, model, belief)
         compiled_at = time.perf_counter()
@@ -531,12 +531,12 @@ def startup_section(runs: int) -> dict[str, Any]:
 
 def scaling_section(sizes: list[int], planner: Any) -> dict[str, Any]:
     import smach
+    from plan_bridge.belief import Belief
     from plan_bridge.execution.compile import compile_plan
     from plan_bridge.execution.events import PlanComputed
     from plan_bridge.execution.executive import Executive
     from plan_bridge.execution.semantics import ActionModel
     from plan_bridge.execution.simulation import SimulatedWorld, symbolic_skills
-    from plan_bridge.execution.world import WorldState
 
     rows = []
     for nodes in sizes:
@@ -553,7 +553,7 @@ def scaling_section(sizes: list[int], planner: Any) -> dict[str, Any]:
         plan = _steps(plans[0].steps)
         # Compile and execute separately (symbolic skills, a fresh world and belief).
         world = SimulatedWorld(task)
-        belief = WorldState(task.initial_facts)
+        belief = Belief(task.initial_facts)
         model = ActionModel(task)
         started = time.perf_counter()
         compiled = compile_plan(plan, symbolic_skills(world), model, belief)

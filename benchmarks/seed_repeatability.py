@@ -126,11 +126,11 @@ def dispatch_cost(runs: int) -> dict[str, float]:
     clock, ``runs`` each, alternating: what taking turns costs."""
     import statistics
 
+    from plan_bridge.belief import Belief
     from plan_bridge.execution.clock import WALL_CLOCK
     from plan_bridge.execution.semantics import ActionModel
     from plan_bridge.execution.temporal import compile_temporal
     from plan_bridge.execution.timed_world import TimedWorld, timed_skills
-    from plan_bridge.execution.world import WorldState
     from plan_bridge.pddl.task import load_task
     from plan_bridge.planning.planner import get_planner
 
@@ -142,7 +142,7 @@ def dispatch_cost(runs: int) -> dict[str, float]:
         for name, samples in times.items():
             world = TimedWorld(task, seed=n)
             model = ActionModel(task)
-            belief = WorldState(task.initial_facts, model.initial_values())
+            belief = Belief(task.initial_facts, model.initial_values())
             clock = None if name == "simulated clock" else WALL_CLOCK  # None: the world's
             compiled = compile_temporal(
                 plan, timed_skills(world), model, belief, world=world, clock=clock

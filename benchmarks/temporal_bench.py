@@ -276,12 +276,12 @@ def courier() -> tuple[Any, list[Any]]:
 
 def dispatch_once(task: Any, plan: list[Any], time_scale: float) -> tuple[Any, float, float]:
     """Compile and run ``plan`` with no-op skills: (dispatch, compile s, dispatch s)."""
+    from plan_bridge.belief import Belief
     from plan_bridge.execution.semantics import ActionModel
     from plan_bridge.execution.temporal import compile_temporal
-    from plan_bridge.execution.world import WorldState
 
     model = ActionModel(task)  # fresh: grounding is part of compiling
-    belief = WorldState(task.initial_facts, model.initial_values())
+    belief = Belief(task.initial_facts, model.initial_values())
     started = time.perf_counter()
     compiled = compile_temporal(plan, noop_skills(task), model, belief, time_scale=time_scale)
     compiled_at = time.perf_counter()
@@ -327,14 +327,14 @@ def jitter_section(scales: list[float], trials: int, steps: int) -> list[dict[st
 
 
 def hundred_section(steps: int, trials: int) -> dict[str, Any]:
+    from plan_bridge.belief import Belief
     from plan_bridge.execution.compile import compile_plan
     from plan_bridge.execution.semantics import ActionModel
-    from plan_bridge.execution.world import WorldState
     from plan_bridge.planning.planner import PlanStep
 
     task, plan = patrol(steps)
     model = ActionModel(task)
-    check = model.check_plan(plan, WorldState(task.initial_facts, model.initial_values()).facts)
+    check = model.check_plan(plan, Belief(task.initial_facts, model.initial_values()).facts)
     assert check.valid, check.explain()
     compile_times, dispatch_times = [], []
     for _ in range(trials):
@@ -345,7 +345,7 @@ def hundred_section(steps: int, trials: int) -> dict[str, Any]:
     seq_compile, seq_run = [], []
     for _ in range(trials):
         model = ActionModel(task)
-        belief = WorldState(task.initial_facts, model.initial_values())
+        belief = Belief(task.initial_facts, model.initial_values())
         started = time.perf_counter()
         compiled = compile_plan(sequential, noop_skills(task), model, belief)
         compiled_at = time.perf_counter()

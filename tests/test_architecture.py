@@ -88,8 +88,6 @@ def test_a_module_over_600_lines_says_why_at_its_top() -> None:
 #: files sorted. The list only shrinks: a circle that is gone must leave it
 #: (test_every_listed_circle_still_exists), and no other may appear.
 KNOWN_FILE_CYCLES_TO_REMOVE = {
-    # The simulated clock's participants hold the world; the world owns its clock.
-    ("plan_bridge.execution.clock", "plan_bridge.execution.world"),
     # Plans compile into layers or into a temporal dispatcher whose steps compile back.
     (
         "plan_bridge.execution.compile",

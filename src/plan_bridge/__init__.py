@@ -32,10 +32,10 @@ from plan_bridge.errors import (
 )
 
 if TYPE_CHECKING:
+    from plan_bridge.belief import Belief
     from plan_bridge.execution.compile import compile_plan
     from plan_bridge.execution.executive import Executive, ReplanPolicy
     from plan_bridge.execution.simulation import SimulatedWorld
-    from plan_bridge.execution.world import WorldState
     from plan_bridge.missions.mission import MissionSetup, Target, load_target
     from plan_bridge.pddl.task import (
         ActionSchema,
@@ -72,7 +72,7 @@ _LAZY = {
     "installed_planners": "plan_bridge.planning.registry",
     "Skill": "plan_bridge.skills.registry",
     "SkillRegistry": "plan_bridge.skills.registry",
-    "WorldState": "plan_bridge.execution.world",
+    "Belief": "plan_bridge.belief",
     "compile_plan": "plan_bridge.execution.compile",
     "Executive": "plan_bridge.execution.executive",
     "ReplanPolicy": "plan_bridge.execution.executive",
@@ -84,6 +84,7 @@ _LAZY = {
 
 __all__ = [
     "ActionSchema",
+    "Belief",
     "Executive",
     "Fact",
     "FactError",
@@ -104,7 +105,6 @@ __all__ = [
     "UPPlanner",
     "UnsupportedFeatureError",
     "WorkerError",
-    "WorldState",
     "compile_plan",
     "format_fact",
     "get_planner",

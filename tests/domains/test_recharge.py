@@ -9,8 +9,8 @@ from __future__ import annotations
 import pytest
 from pr2_missions import BY_NAME, RATES, planner, setup_with_fault, sweep, target
 
+from plan_bridge.belief import normalise_observations
 from plan_bridge.execution.executive import Executive
-from plan_bridge.execution.world import normalise_observations
 from plan_bridge.planning.planner import PlanStep
 
 NAME = "recharge"

@@ -42,16 +42,14 @@ import time
 from collections.abc import Callable, Iterator
 from contextlib import AbstractContextManager
 from types import TracebackType
-from typing import TYPE_CHECKING, Protocol, runtime_checkable
-
-if TYPE_CHECKING:
-    from plan_bridge.execution.world import World
+from typing import Protocol, runtime_checkable
 
 __all__ = [
     "MAX_PACE_S",
     "WALL_CLOCK",
     "Clock",
     "ClockCondition",
+    "HasClock",
     "SimClock",
     "Ticket",
     "WallClock",
@@ -164,7 +162,14 @@ class WallClock:
 WALL_CLOCK = WallClock()
 
 
-def clock_of(world: World | None) -> Clock:
+class HasClock(Protocol):
+    """What has a clock: a :class:`~plan_bridge.execution.world.World`."""
+
+    @property
+    def clock(self) -> Clock: ...
+
+
+def clock_of(world: HasClock | None) -> Clock:
     """The clock of ``world``, or the wall clock when there is no world."""
     return WALL_CLOCK if world is None else world.clock
 

@@ -22,17 +22,12 @@ from dataclasses import dataclass, field
 from typing import Any, TypedDict, TypeVar
 
 import smach
+from plan_bridge.belief import Belief, Observation, describe_observation, normalise_observations
 from plan_bridge.execution.clock import SimClock, Ticket, clock_of
 from plan_bridge.execution.events import ObservationsApplied, StepFinished
 from plan_bridge.execution.semantics import ActionModel, GroundAction
 from plan_bridge.execution.temporal_network import is_temporal
-from plan_bridge.execution.world import (
-    Observation,
-    World,
-    WorldState,
-    describe_observation,
-    normalise_observations,
-)
+from plan_bridge.execution.world import World
 from plan_bridge.pddl.task import Fact
 from plan_bridge.planning.types import PlanStep
 from plan_bridge.skills.registry import (
@@ -146,7 +141,7 @@ class StepState(smach.Wrapper):
         self,
         index: int,
         ground: GroundAction,
-        belief: WorldState,
+        belief: Belief,
         skill: Skill | None,
         *,
         check_preconditions: bool = True,
@@ -332,7 +327,7 @@ def compile_plan(
     steps: Sequence[PlanStep],
     skills: SkillRegistry,
     model: ActionModel,
-    belief: WorldState,
+    belief: Belief,
     *,
     first_index: int = 1,
     concurrent: bool = False,
@@ -428,7 +423,7 @@ def build_steps(
     steps: Sequence[PlanStep],
     skills: SkillRegistry,
     model: ActionModel,
-    belief: WorldState,
+    belief: Belief,
     *,
     first_index: int = 1,
     check_preconditions: bool = True,

@@ -24,6 +24,7 @@ from collections.abc import Callable, Iterable, Sequence
 from typing import TYPE_CHECKING, Any
 
 import smach
+from plan_bridge.belief import Belief, Observation, describe_observation, normalise_observations
 from plan_bridge.errors import FactError, PlanBridgeError
 from plan_bridge.execution.compile import (
     CompiledPlan,
@@ -41,13 +42,7 @@ from plan_bridge.execution.replanner import MissionEnded, Replanner
 from plan_bridge.execution.semantics import ActionModel
 from plan_bridge.execution.task_view import TaskView, adopt_map_atoms
 from plan_bridge.execution.temporal import TemporalDispatch
-from plan_bridge.execution.world import (
-    Observation,
-    World,
-    WorldState,
-    describe_observation,
-    normalise_observations,
-)
+from plan_bridge.execution.world import World
 from plan_bridge.pddl.task import Fact, PlanningTask, format_fact, parse_fact
 from plan_bridge.planning.registry import get_planner
 from plan_bridge.planning.types import Planner, PlanResult, PlanStep
@@ -100,8 +95,8 @@ class Executive(PlanContainer):
         *,
         world: World | None = None,
         policy: ReplanPolicy | None = None,
-        belief: WorldState | None = None,
-        sense: Callable[[WorldState], Iterable[Any]] | None = None,
+        belief: Belief | None = None,
+        sense: Callable[[Belief], Iterable[Any]] | None = None,
         concurrent: bool = False,
         check_preconditions: bool = True,
         input_keys: Iterable[str] = (),
@@ -140,10 +135,10 @@ class Executive(PlanContainer):
         if belief is not None:
             self.belief = belief
         elif task_view is not None:
-            self.belief = WorldState(task_view.belief())
+            self.belief = Belief(task_view.belief())
             adopt_map_atoms(task_view, self.belief, task, self.model.initial_values())
         else:
-            self.belief = WorldState(task.initial_facts, self.model.initial_values())
+            self.belief = Belief(task.initial_facts, self.model.initial_values())
         #: Temporal plans: wall seconds per plan second (0: start steps on events only)
         #: and what happens to running steps when one fails (``finish`` or ``preempt``).
         self.time_scale = 0.0
@@ -277,22 +272,9 @@ class Executive(PlanContainer):
             )
             if self.model.goal_holds(self.belief.facts):
                 return "succeeded"
-            if failed is None:
-                reason = "the plan finished but the goal does not hold: " + ", ".join(
-                    self.model.unmet_goals(self.belief.facts)
-                )
-                rest: list[PlanStep] = []
-                record = None
-            else:
-                record = self._records.get(first + failed)
-                reason = self._failure_reason(plan[failed], record)
-                # The failed step first, then every other step not done yet (with
-                # concurrent layers, later steps may be done and same-layer ones not).
-                rest = [plan[failed]] + [
-                    step
-                    for i, step in enumerate(plan)
-                    if i != failed and not self._succeeded(first + i)
-                ]
+            reason, rest, record = self._what_failed(
+                plan, first, failed, "the plan finished but the goal does not hold"
+            )
             self._retask()
             plan = recovery.recover(rest, reason, record)
 
@@ -631,6 +613,23 @@ class Executive(PlanContainer):
         self._resume_plan_zero = float(zero) if isinstance(zero, int | float) else None
         self.decide("resume", f"resuming with {len(plan)} steps left from a checkpoint")
         return plan, int(snapshot["first_index"])
+
+    def _what_failed(
+        self, plan: Sequence[PlanStep], first: int, failed: int | None, finished: str
+    ) -> tuple[str, list[PlanStep], StepRecord | None]:
+        """Why the plan (its steps labelled from ``first``) stopped, the steps to
+        recover (the failed one first, then every other one not done yet: with
+        concurrent layers, later steps may be done and same-layer ones not), and the
+        failed step's record. ``failed`` None: the plan finished, ``finished`` says
+        what does not hold."""
+        if failed is None:
+            unmet = ", ".join(self.model.unmet_goals(self.belief.facts))
+            return f"{finished}: {unmet}", [], None
+        record = self._records.get(first + failed)
+        rest = [plan[failed]] + [
+            step for i, step in enumerate(plan) if i != failed and not self._succeeded(first + i)
+        ]
+        return self._failure_reason(plan[failed], record), rest, record
 
     def _failure_reason(self, step: PlanStep, record: StepRecord | None) -> str:
         if record is None:

@@ -15,7 +15,7 @@ from __future__ import annotations
 import threading
 from collections.abc import Callable
 
-from plan_bridge.execution.world import WorldState
+from plan_bridge.belief import Belief
 from plan_bridge.pddl.knowledge import KnowledgeBase, KnowledgeChange
 from plan_bridge.pddl.task import PlanningTask
 
@@ -33,7 +33,7 @@ class KnowledgeLink:
     def __init__(
         self,
         knowledge: KnowledgeBase,
-        belief: WorldState,
+        belief: Belief,
         task: PlanningTask,
         stop: Callable[[], None],
         *,

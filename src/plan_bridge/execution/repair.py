@@ -49,12 +49,12 @@ from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
+from plan_bridge.belief import Belief
 from plan_bridge.execution.compile import StepRecord
 from plan_bridge.execution.policy import ExecutionReport, ReplanPolicy
 from plan_bridge.execution.replanner import MissionEnded, Replanner
 from plan_bridge.execution.semantics import ActionModel
 from plan_bridge.execution.temporal_network import is_temporal
-from plan_bridge.execution.world import WorldState
 from plan_bridge.pddl.task import Fact, format_fact, parse_fact
 from plan_bridge.planning.types import PlanStep
 from plan_bridge.skills.registry import SkillRegistry
@@ -303,7 +303,7 @@ class Recovery:
         self,
         model: ActionModel,
         policy: ReplanPolicy,
-        belief: WorldState,
+        belief: Belief,
         replanner: Replanner,
         report: ExecutionReport,
         decide: Decide,

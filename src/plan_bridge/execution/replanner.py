@@ -18,11 +18,11 @@ import dataclasses
 import threading
 from collections.abc import Callable, Sequence
 
+from plan_bridge.belief import Belief, FactSnapshot
 from plan_bridge.execution.plan_cache import PlanCache
 from plan_bridge.execution.policy import ExecutionReport, ReplanPolicy
 from plan_bridge.execution.semantics import ActionModel
 from plan_bridge.execution.task_view import project
-from plan_bridge.execution.world import FactSnapshot, WorldState
 from plan_bridge.pddl.task import Fact, PlanningTask
 from plan_bridge.planning.engines import WARM, AutoPlanner
 from plan_bridge.planning.planner import UPPlanner
@@ -50,7 +50,7 @@ class Replanner:
         planner: Planner,
         policy: ReplanPolicy,
         model: ActionModel,
-        belief: WorldState,
+        belief: Belief,
         cache: PlanCache,
         preempt: threading.Event,
         on_plan: Callable[[str, PlanResult], None],

@@ -11,7 +11,7 @@ Supported: conjunction, disjunction, negation, implication, equivalence, equalit
 objects, existential and universal quantifiers, conditional and universally
 quantified effects; numeric fluents (``(battery ?r)``) in comparisons, arithmetic
 (+ - * /) and effects (assign, increase, decrease), read from and written to the
-numbers a state carries (:func:`~plan_bridge.execution.world.values_of`). A
+numbers a state carries (:func:`~plan_bridge.belief.values_of`). A
 comparison with an undefined numeric value is false. ``total-cost`` is left out: it
 only carries plan costs.
 
@@ -35,8 +35,8 @@ from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from plan_bridge.belief import FactSnapshot, values_of
 from plan_bridge.errors import PlanBridgeError, UnsupportedFeatureError
-from plan_bridge.execution.world import FactSnapshot, values_of
 from plan_bridge.pddl.task import Fact, PlanningTask, format_fact
 from plan_bridge.planning.types import PlanStep
 

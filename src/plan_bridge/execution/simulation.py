@@ -23,10 +23,10 @@ from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import smach
+from plan_bridge.belief import FactSnapshot, Observation
 from plan_bridge.execution.clock import MAX_PACE_S, SimClock
 from plan_bridge.execution.semantics import ActionModel, GroundAction
 from plan_bridge.execution.snapshots import SnapshotError, decode, encode
-from plan_bridge.execution.world import FactSnapshot, Observation
 from plan_bridge.pddl.task import Fact, PlanningTask, format_fact, parse_fact
 from plan_bridge.planning.types import PlanStep
 from plan_bridge.skills.registry import SkillRegistry

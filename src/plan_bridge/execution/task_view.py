@@ -19,7 +19,7 @@ from __future__ import annotations
 from collections.abc import Collection, Mapping, Sequence
 from typing import Protocol, runtime_checkable
 
-from plan_bridge.execution.world import FactSnapshot, WorldState, values_of
+from plan_bridge.belief import Belief, FactSnapshot, values_of
 from plan_bridge.pddl.task import Fact, PlanningTask
 
 __all__ = ["TaskView", "adopt_map_atoms", "project"]
@@ -50,7 +50,7 @@ class TaskView(Protocol):
 
 
 def adopt_map_atoms(
-    view: TaskView, belief: WorldState, task: PlanningTask, initial_values: Mapping[Fact, float]
+    view: TaskView, belief: Belief, task: PlanningTask, initial_values: Mapping[Fact, float]
 ) -> None:
     """Put ``task``'s map atoms (its facts, and of ``initial_values``, its initial
     numbers) into the belief in place of those it held; numbers the belief does not

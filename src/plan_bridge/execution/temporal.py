@@ -70,6 +70,7 @@ from functools import partial
 from typing import Any, Unpack
 
 import smach
+from plan_bridge.belief import Belief
 from plan_bridge.execution.clock import WALL_CLOCK, Clock, Ticket, clock_of
 from plan_bridge.execution.compile import (
     STEP_OUTCOMES,
@@ -96,7 +97,6 @@ from plan_bridge.execution.timed_step import (
     TimedStepState,
 )
 from plan_bridge.execution.timeline import ActionEnded, ActionStarted, TimelineRecorder
-from plan_bridge.execution.world import WorldState
 from plan_bridge.pddl.task import Fact
 from plan_bridge.planning.types import PlanStep
 from plan_bridge.skills.registry import SkillRegistry
@@ -167,7 +167,7 @@ class TemporalDispatch(PlanContainer):
         states: Sequence[TimedStepState],
         labels: Sequence[str],
         model: ActionModel,
-        belief: WorldState,
+        belief: Belief,
         *,
         time_scale: float = 0.0,
         on_failure: str = "finish",
@@ -517,7 +517,7 @@ def compile_temporal(
     steps: Sequence[PlanStep],
     skills: SkillRegistry,
     model: ActionModel,
-    belief: WorldState,
+    belief: Belief,
     *,
     time_scale: float = 0.0,
     on_failure: str = "finish",

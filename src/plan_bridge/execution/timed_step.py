@@ -26,10 +26,11 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import smach
+from plan_bridge.belief import Belief
 from plan_bridge.execution.compile import PlanHold, StepRecord, StepState
 from plan_bridge.execution.semantics import GroundAction
 from plan_bridge.execution.timeline import ActionEnded, ActionStarted, Timing
-from plan_bridge.execution.world import World, WorldState
+from plan_bridge.execution.world import World
 from plan_bridge.pddl.task import Fact
 from plan_bridge.planning.types import PlanStep
 from plan_bridge.skills.registry import STEP_KEYS, Skill
@@ -87,7 +88,7 @@ class TimedStepState(StepState):
         self,
         index: int,
         ground: GroundAction,
-        belief: WorldState,
+        belief: Belief,
         skill: Skill | None,
         *,
         check_preconditions: bool = True,

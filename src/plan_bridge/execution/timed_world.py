@@ -40,9 +40,9 @@ from collections.abc import Mapping
 from typing import Any, ClassVar
 
 import smach
+from plan_bridge.belief import values_of
 from plan_bridge.execution.semantics import GroundAction
 from plan_bridge.execution.simulation import SimulatedWorld
-from plan_bridge.execution.world import values_of
 from plan_bridge.pddl.task import Fact, PlanningTask
 from plan_bridge.planning.types import PlanStep
 from plan_bridge.skills.registry import SkillRegistry

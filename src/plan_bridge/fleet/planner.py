@@ -38,9 +38,9 @@ from collections.abc import Iterable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
+from plan_bridge.belief import FactSnapshot
 from plan_bridge.execution.semantics import ActionModel
 from plan_bridge.execution.task_view import project
-from plan_bridge.execution.world import FactSnapshot
 from plan_bridge.fleet.jobs import Job, allocate, jobs_of
 from plan_bridge.maps.plans import tidied
 from plan_bridge.maps.tasks import RouteTasks

@@ -15,9 +15,9 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 
+from plan_bridge.belief import FactSnapshot
 from plan_bridge.execution.semantics import ActionModel
 from plan_bridge.execution.temporal_network import is_temporal, retimed
-from plan_bridge.execution.world import FactSnapshot
 from plan_bridge.pddl.task import Fact, PlanningTask
 from plan_bridge.planning.types import PlanStep
 

@@ -31,8 +31,8 @@ from collections.abc import Collection, Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from plan_bridge.belief import FactSnapshot, values_of
 from plan_bridge.errors import PlanBridgeError
-from plan_bridge.execution.world import FactSnapshot, values_of
 from plan_bridge.maps.graph import PlaceMap
 from plan_bridge.maps.model import WorldModel
 from plan_bridge.pddl.spec import ProblemSpec

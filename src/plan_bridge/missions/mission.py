@@ -34,8 +34,9 @@ from plan_bridge.pddl.task import Fact, PlanningTask, load_task
 from plan_bridge.skills.registry import SkillRegistry
 
 if TYPE_CHECKING:
+    from plan_bridge.belief import Belief
     from plan_bridge.execution.task_view import TaskView
-    from plan_bridge.execution.world import World, WorldState
+    from plan_bridge.execution.world import World
     from plan_bridge.planning.types import Planner
     from plan_bridge.planning.worker import WorkerPool
 
@@ -61,7 +62,7 @@ class MissionSetup:
     world: World | None = None
     """The world the skills act on (default: the one ``skills``' simulated skills act
     on, ``skills.world``); it learns what the user's own skills did."""
-    sense: Callable[[WorldState], Iterable[Any]] | None = None
+    sense: Callable[[Belief], Iterable[Any]] | None = None
     concurrent: bool = False
     """Run independent steps (e.g. of two robots) concurrently."""
     task_view: TaskView | None = None

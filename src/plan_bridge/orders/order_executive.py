@@ -35,6 +35,7 @@ import threading
 from collections.abc import Callable, Collection, Mapping, Sequence
 from typing import Any
 
+from plan_bridge.belief import FactSnapshot, values_of
 from plan_bridge.errors import PlanBridgeError
 from plan_bridge.execution.clock import clock_of
 from plan_bridge.execution.compile import StepRecord
@@ -42,7 +43,6 @@ from plan_bridge.execution.control import task_with_goal
 from plan_bridge.execution.executive import Executive
 from plan_bridge.execution.repair import Recovery
 from plan_bridge.execution.replanner import MissionEnded
-from plan_bridge.execution.world import FactSnapshot, values_of
 from plan_bridge.orders.assignment import agents_of, order_work
 from plan_bridge.orders.book import OrderBook, OrderBookError
 from plan_bridge.orders.order import OrderChanged, OrderState, OrderStatus
@@ -224,20 +224,9 @@ class OrderExecutive(Executive):
             return []
         if failed is None and not self._open_in_plan():
             return []  # the plan's orders are done (or gone)
-        if failed is None:
-            reason = "the plan finished but its orders' goals do not hold: " + ", ".join(
-                self.model.unmet_goals(self.belief.facts)
-            )
-            rest: list[PlanStep] = []
-            record = None
-        else:
-            record = self._records.get(first + failed)
-            reason = self._failure_reason(plan[failed], record)
-            rest = [plan[failed]] + [
-                step
-                for i, step in enumerate(plan)
-                if i != failed and not self._succeeded(first + i)
-            ]
+        reason, rest, record = self._what_failed(
+            plan, first, failed, "the plan finished but its orders' goals do not hold"
+        )
         self._retask()
         try:
             return list(recovery.recover(rest, reason, record))

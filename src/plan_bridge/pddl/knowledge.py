@@ -104,7 +104,7 @@ class KnowledgeChange:
 
 class FactStore(Protocol):
     """Where a knowledge base keeps facts and numeric values: its own store, or an
-    executive's belief (:class:`~plan_bridge.execution.world.WorldState`)."""
+    executive's belief (:class:`~plan_bridge.belief.Belief`)."""
 
     @property
     def facts(self) -> AbstractSet[Fact]: ...

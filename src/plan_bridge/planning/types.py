@@ -153,7 +153,7 @@ def snapshot_values(
     initial_state: Iterable[FactLike] | None, values: Mapping[Fact, float] | None
 ) -> Mapping[Fact, float] | None:
     """``values``, or the numbers a belief's snapshot carries when ``initial_state`` is
-    one (:class:`~plan_bridge.execution.world.FactSnapshot`) and none were given."""
+    one (:class:`~plan_bridge.belief.FactSnapshot`) and none were given."""
     carried = getattr(initial_state, "values", None)
     if values is None and isinstance(carried, Mapping):
         return carried

@@ -7,8 +7,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
+from plan_bridge.belief import Observation
 from plan_bridge.execution.snapshots import SnapshotError
-from plan_bridge.execution.world import Observation
 from plan_bridge.robosim.world import RobosimWorld
 
 if TYPE_CHECKING:

@@ -36,8 +36,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from plan_bridge.belief import Observation
 from plan_bridge.execution.clock import SimClock
-from plan_bridge.execution.world import Observation
 from plan_bridge.maps.graph import PlaceMap
 from plan_bridge.maps.model import WorldModel
 from plan_bridge.pddl.task import Fact, format_fact, parse_fact

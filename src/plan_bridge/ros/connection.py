@@ -23,9 +23,9 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any, TextIO
 
 import smach
+from plan_bridge.belief import Observation
 from plan_bridge.errors import PlanBridgeError
 from plan_bridge.execution.clock import WALL_CLOCK, Clock
-from plan_bridge.execution.world import Observation
 from plan_bridge.planning.types import PlanStep
 from plan_bridge.ros.protocol import HEARTBEAT_TIMEOUT, HEARTBEAT_TOPIC, task_digest
 from plan_bridge.ros.skills import remote_info, ros_skills

@@ -49,10 +49,10 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 import smach
+from plan_bridge.belief import Observation, normalise_observations
 from plan_bridge.errors import FactError
 from plan_bridge.execution.semantics import ActionModel
 from plan_bridge.execution.simulation import SimulatedWorld
-from plan_bridge.execution.world import Observation, normalise_observations
 from plan_bridge.pddl.task import Fact, PlanningTask, parse_fact
 from plan_bridge.planning.types import PlanStep
 from plan_bridge.ros.pacing import Pacer, Run

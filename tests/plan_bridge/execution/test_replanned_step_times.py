@@ -10,10 +10,10 @@ from pathlib import Path
 import pytest
 
 import smach
+from plan_bridge.belief import Belief
 from plan_bridge.execution.compile import compile_plan
 from plan_bridge.execution.semantics import ActionModel
 from plan_bridge.execution.temporal import TimedStepState
-from plan_bridge.execution.world import WorldState
 from plan_bridge.pddl.task import load_task
 from plan_bridge.planning.planner import PlanStep
 from plan_bridge.skills.registry import SkillRegistry
@@ -43,7 +43,7 @@ def test_the_same_action_grounded_again_at_other_times_keeps_the_new_times() -> 
 def test_a_replanned_temporal_step_reports_the_times_of_its_own_plan() -> None:
     task = load_task(DATA / "domain.pddl", DATA / "problem.pddl")
     model = ActionModel(task)
-    belief = WorldState(task.initial_facts, model.initial_values())
+    belief = Belief(task.initial_facts, model.initial_values())
     skills = SkillRegistry()
     skills.fallback = lambda step: Done()
     compile_plan([PlanStep("undock", ("scout", "yard"), 7.0, 1.0)], skills, model, belief)

@@ -5,9 +5,9 @@ from __future__ import annotations
 
 from typing import Any
 
+from plan_bridge.belief import Belief, FactSnapshot
 from plan_bridge.execution.semantics import ActionModel
 from plan_bridge.execution.task_view import TaskView, adopt_map_atoms, project
-from plan_bridge.execution.world import FactSnapshot, WorldState
 from plan_bridge.maps.tasks import RouteTasks
 
 
@@ -27,7 +27,7 @@ def test_a_new_task_brings_its_routes_into_the_belief(house: Any) -> None:
     view = RouteTasks(house())
     goal = [("at", "apple", "shelf_top")]
     first = view.task_for(view.belief(), goal)
-    belief = WorldState(view.belief())
+    belief = Belief(view.belief())
     adopt_map_atoms(view, belief, first, ActionModel(first).initial_values())
     assert ("route", "kitchen", "shelf_top") in belief.facts
     assert ("at", "pear", "shelf_top") in belief.facts  # what the task does not hold stays

@@ -10,6 +10,7 @@ from typing import Any
 import pytest
 
 import smach
+from plan_bridge.belief import Belief
 from plan_bridge.execution.compile import CompiledPlan, PlanHold, StepRecord, compile_plan
 from plan_bridge.execution.semantics import ActionModel
 from plan_bridge.execution.temporal import (
@@ -20,7 +21,6 @@ from plan_bridge.execution.temporal import (
     end_precedence,
     precedence,
 )
-from plan_bridge.execution.world import WorldState
 from plan_bridge.pddl.task import PlanningTask, load_task, load_task_from_text
 from plan_bridge.planning.planner import PlanStep
 from plan_bridge.skills.registry import SkillRegistry
@@ -69,9 +69,9 @@ def skills_with(**seconds: float) -> SkillRegistry:
 
 def run(
     task: PlanningTask, skills: SkillRegistry, steps: list[PlanStep], **options: object
-) -> tuple[str | None, TemporalDispatch, WorldState, list[object]]:
+) -> tuple[str | None, TemporalDispatch, Belief, list[object]]:
     model = ActionModel(task)
-    belief = WorldState(task.initial_facts, model.initial_values())
+    belief = Belief(task.initial_facts, model.initial_values())
     compiled = compile_plan(steps, skills, model, belief, **options)  # type: ignore[arg-type]
     dispatch = compiled.machine
     assert isinstance(dispatch, TemporalDispatch)
@@ -127,7 +127,7 @@ def test_skills_receive_the_planned_duration(task: PlanningTask) -> None:
 def test_an_over_all_condition_broken_mid_action_preempts_the_step(task: PlanningTask) -> None:
     registry = skills_with(hold_light=5.0, inspect=5.0)
     model = ActionModel(task)
-    belief = WorldState(task.initial_facts, model.initial_values())
+    belief = Belief(task.initial_facts, model.initial_values())
     compiled = compile_plan(PLAN, registry, model, belief, on_failure="preempt")
     dispatch = compiled.machine
     outcome: list[str | None] = []
@@ -203,7 +203,7 @@ def test_the_timed_check_accepts_overlap_and_refuses_a_broken_invariant(
     task: PlanningTask,
 ) -> None:
     model = ActionModel(task)
-    facts = WorldState(task.initial_facts, model.initial_values()).facts
+    facts = Belief(task.initial_facts, model.initial_values()).facts
     assert model.check_plan(PLAN, facts).valid
     late_light = [PLAN[0], PLAN[1], PlanStep("inspect", ("scout", "yard"), 3.5, 2.0)]
     check = model.check_plan(late_light, facts)
@@ -288,7 +288,7 @@ def test_what_a_checkpoint_keeps_of_the_belief_leaves_out_steps_in_progress(
     task: PlanningTask,
 ) -> None:
     model = ActionModel(task)
-    belief = WorldState(task.initial_facts, model.initial_values())
+    belief = Belief(task.initial_facts, model.initial_values())
     seen: list[tuple[frozenset[object], frozenset[object]]] = []
     compiled: list[CompiledPlan] = []
 
@@ -385,7 +385,7 @@ def test_a_given_plan_zero_puts_the_steps_on_the_timeline_of_an_earlier_run(
 
         registry.fallback = lambda step, note=note: smach.CBState(note, outcomes=["succeeded"])
         model = ActionModel(task)
-        belief = WorldState(task.initial_facts, model.initial_values())
+        belief = Belief(task.initial_facts, model.initial_values())
         belief.observe([(("docked", "scout"), False), (("light-on", "yard"), True)])
         compiled = compile_temporal([PLAN[2]], registry, model, belief, clock=clock)
         dispatch = compiled.machine
@@ -400,7 +400,7 @@ def test_a_given_plan_zero_puts_the_steps_on_the_timeline_of_an_earlier_run(
 def test_a_held_plan_starts_no_step_and_lets_the_running_ones_finish(task: PlanningTask) -> None:
     hold = PlanHold()
     model = ActionModel(task)
-    belief = WorldState(task.initial_facts, model.initial_values())
+    belief = Belief(task.initial_facts, model.initial_values())
     skills = skills_with(hold_light=0.3, undock=0.3)
     compiled = compile_plan(PLAN, skills, model, belief, hold=hold)
     dispatch = compiled.machine
@@ -425,7 +425,7 @@ def test_a_plan_holds_when_the_clock_reaches_its_alarm(task: PlanningTask) -> No
     hold = PlanHold()
     hold.alarm = lambda: 1.005  # after undock's end (1.0), before inspect's start (1.01)
     model = ActionModel(task)
-    belief = WorldState(task.initial_facts, model.initial_values())
+    belief = Belief(task.initial_facts, model.initial_values())
     registry = SkillRegistry()
     registry.fallback = lambda step: ClockSkill(clock, step.duration or 0.0)
     compiled = compile_temporal(PLAN, registry, model, belief, clock=clock, hold=hold)

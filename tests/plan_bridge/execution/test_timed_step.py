@@ -7,9 +7,9 @@ from pathlib import Path
 import pytest
 
 import smach
+from plan_bridge.belief import Belief
 from plan_bridge.execution.semantics import ActionModel
 from plan_bridge.execution.timed_step import StepHooks, TimedStepState
-from plan_bridge.execution.world import WorldState
 from plan_bridge.pddl.task import PlanningTask, load_task
 from plan_bridge.planning.planner import PlanStep
 
@@ -36,9 +36,9 @@ class Ends(smach.State):
 
 def step_with(
     task: PlanningTask, step: PlanStep, outcome: str, calls: list[str]
-) -> tuple[TimedStepState, WorldState]:
+) -> tuple[TimedStepState, Belief]:
     model = ActionModel(task)
-    belief = WorldState(task.initial_facts, model.initial_values())
+    belief = Belief(task.initial_facts, model.initial_values())
     ticks = iter([10.0, 11.5])
     hooks = StepHooks(
         elapsed=lambda: next(ticks),
@@ -77,7 +77,7 @@ def test_a_failed_step_tells_its_hooks_and_takes_back_its_start(task: PlanningTa
 
 def test_a_step_without_hooks_runs_on_its_own(task: PlanningTask) -> None:
     model = ActionModel(task)
-    belief = WorldState(task.initial_facts, model.initial_values())
+    belief = Belief(task.initial_facts, model.initial_values())
     state = TimedStepState(1, model.ground(PlanStep("undock", ("scout", "yard"))), belief, None)
     state.add("SKILL", Ends("succeeded"))
     assert state.execute() == "succeeded"

@@ -6,8 +6,8 @@ from typing import Any
 
 import pytest
 
+from plan_bridge.belief import FactSnapshot
 from plan_bridge.execution.semantics import ActionModel
-from plan_bridge.execution.world import FactSnapshot
 from plan_bridge.fleet.planner import FleetPlanner
 from plan_bridge.maps.tasks import RouteTasks
 

@@ -7,9 +7,9 @@ from typing import Any
 
 import pytest
 
+from plan_bridge.belief import FactSnapshot
 from plan_bridge.execution.semantics import ActionModel
 from plan_bridge.execution.temporal_network import retimed
-from plan_bridge.execution.world import FactSnapshot
 from plan_bridge.maps.plans import tidied
 from plan_bridge.maps.tasks import RouteTasks
 from plan_bridge.planning.types import PlanStep

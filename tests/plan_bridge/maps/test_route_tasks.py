@@ -7,7 +7,7 @@ from typing import Any
 
 import pytest
 
-from plan_bridge.execution.world import FactSnapshot
+from plan_bridge.belief import FactSnapshot
 from plan_bridge.maps.tasks import RouteTasks, TaskError
 
 

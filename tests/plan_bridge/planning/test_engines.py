@@ -8,8 +8,8 @@ from typing import Any
 
 import pytest
 
+from plan_bridge.belief import Belief
 from plan_bridge.execution.semantics import ActionModel
-from plan_bridge.execution.world import WorldState
 from plan_bridge.pddl.task import PlanningTask, load_task
 from plan_bridge.planning.engines import AutoPlanner, engines_for, problem_kind
 from plan_bridge.planning.planner import PlanResult, PlanStatus, get_planner
@@ -58,7 +58,7 @@ def test_auto_plans_a_temporal_problem_with_start_times_durations_and_makespan(
     assert payload["makespan"] == pytest.approx(result.makespan)
     assert {entry["action"] for entry in payload["actions"]} == set(result.plan_strings())
     model = ActionModel(patrol)
-    facts = WorldState(patrol.initial_facts, model.initial_values()).facts
+    facts = Belief(patrol.initial_facts, model.initial_values()).facts
     assert model.check_plan(result.actions, facts).valid
 
 
@@ -93,7 +93,7 @@ def test_a_replan_from_a_belief_uses_its_numbers(patrol: PlanningTask) -> None:
     values[("energy", "scout")] = 1.0  # too little to inspect
     values[("energy", "lamp")] = 9.0
     facts = set(patrol.initial_facts) | {("docked", "lamp")}
-    belief = WorldState(facts, values)
+    belief = Belief(facts, values)
     result = get_planner("auto").solve(patrol, timeout=30, initial_state=belief.facts)
     assert result.solved
     inspect = next(s for s in result.actions if s.action == "inspect")

@@ -8,8 +8,8 @@ from typing import Any
 
 import pytest
 
+from plan_bridge.belief import FactSnapshot
 from plan_bridge.execution.semantics import ActionModel
-from plan_bridge.execution.world import FactSnapshot
 from plan_bridge.maps.tasks import RouteTasks
 from plan_bridge.pddl.task import load_task
 from plan_bridge.planning.kairos_direct import solve_with_kairos

@@ -7,9 +7,9 @@ from pathlib import Path
 import pytest
 
 import smach
+from plan_bridge.belief import normalise_observations
 from plan_bridge.execution.executive import Executive
 from plan_bridge.execution.simulation import SimulatedWorld, symbolic_skills
-from plan_bridge.execution.world import normalise_observations
 from plan_bridge.pddl.task import PlanningTask, load_task
 from plan_bridge.planning.planner import PlanStep, get_planner
 from plan_bridge.skills.kit import (

@@ -4,17 +4,17 @@ from __future__ import annotations
 
 import pytest
 
-from plan_bridge.execution.world import WorldState, normalise_observations
+from plan_bridge.belief import Belief, normalise_observations
 
 
 def test_apply_deletes_before_adding() -> None:
-    world = WorldState(["(at r a)"])
+    world = Belief(["(at r a)"])
     world.apply(adds=[("at", "r", "a")], deletes=[("at", "r", "a")])
     assert world.holds("(at r a)")
 
 
 def test_observe_returns_only_the_changes() -> None:
-    world = WorldState(["(at r a)", "(free r)"])
+    world = Belief(["(at r a)", "(free r)"])
     changed = world.observe(
         [(("at", "r", "a"), False), (("free", "r"), True), (("at", "r", "b"), True)]
     )
