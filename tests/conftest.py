@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import os
 import signal
+import sys
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -73,3 +75,14 @@ def pytest_configure_node(node: Any) -> None:
     # from the same durations, even if the file changes while they start.
     path = Path(node.config.getoption("durations_path"))
     node.workerinput["tiers_durations"] = tiers.load_durations(path)
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _planner_workers_stop_with_the_tests() -> Iterator[None]:
+    """The planner's worker processes this process started stop when its tests end,
+    not at its exit: under coverage each saves its data as it exits, and that must come
+    before pytest-cov combines the data files (else they stay behind, uncounted)."""
+    yield
+    worker = sys.modules.get("plan_bridge.planning.worker")
+    if worker is not None:
+        worker._close_default_pool()

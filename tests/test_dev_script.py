@@ -5,7 +5,9 @@ that writes a log slowly; nothing is installed.
 
 `./dev test` lints, type-checks, then runs pytest on xdist workers: everything with
 coverage (and records the durations file), `--fast` the unit tier, or what it is given.
-Checked against a fake installed `.venv` that logs each call."""
+Checked against a fake installed `.venv` that logs each call. Its coverage counts the
+programs the tests start (pyproject.toml's [tool.coverage.run]): checked for real, on a
+`python -m plan_bridge --help` started by a test."""
 
 from __future__ import annotations
 
@@ -13,6 +15,7 @@ import hashlib
 import os
 import re
 import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -70,7 +73,8 @@ def fake_dev(tmp_path: Path) -> tuple[Path, dict[str, str]]:
             script = folder / name
             script.write_text(f'#!/bin/sh\necho "{name} $*" >> "{tmp_path}/calls.log"\n')
             script.chmod(0o755)
-    env = dict(os.environ, PATH=f"{tools}:{os.environ['PATH']}", DEV_TEST_WORKERS="3")
+    env = {k: v for k, v in os.environ.items() if not k.startswith("COVERAGE_")}
+    env.update(PATH=f"{tools}:{os.environ['PATH']}", DEV_TEST_WORKERS="3")
     return tmp_path / "dev", env
 
 
@@ -105,3 +109,81 @@ def test_dev_test_lints_then_runs_the_tier_asked_for(
         "mypy ",
         f"python {pytest_args}",
     ]
+
+
+@pytest.mark.timeout(60)
+def test_dev_test_combines_coverage_data_written_after_the_report(tmp_path: Path) -> None:
+    """A program that outlived its test writes its coverage data after pytest-cov
+    combined it: `./dev test` combines that file into .coverage and removes what
+    coverage could not read, then exits with pytest's status."""
+    dev, env = fake_dev(tmp_path)
+    python = tmp_path / ".venv" / "bin" / "python"
+    python.write_text(
+        python.read_text() + 'case "$*" in *--cov=*) touch .coverage.vm.pid1.late; exit 3 ;; esac\n'
+    )
+    done = subprocess.run([str(dev), "test"], capture_output=True, text=True, env=env, timeout=50)
+    assert done.returncode == 3, done.stderr  # pytest's
+    calls = (tmp_path / "calls.log").read_text().splitlines()
+    assert calls[-2:] == [
+        "python -m coverage combine --append --quiet .",
+        "python -m coverage report --format=total",
+    ]
+    # The fake coverage combined nothing: the file it could not read is gone all the same.
+    assert "could not be read: .coverage.vm.pid1.late" in done.stderr
+    assert not list(tmp_path.glob(".coverage*"))
+
+
+CHILD_TEST = """
+import subprocess
+import sys
+
+
+def test_help() -> None:
+    done = subprocess.run(
+        [sys.executable, "-m", "plan_bridge", "--help"], capture_output=True, text=True
+    )
+    assert done.returncode == 0 and "plan" in done.stdout
+"""
+
+
+def measured_lines(tmp_path: Path, config: Path) -> tuple[set[int], list[str]]:
+    """Run, under pytest with ``--cov=plan_bridge`` and the coverage ``config``, a test
+    that only starts `python -m plan_bridge --help` (the test imports no plan_bridge
+    itself); the lines of plan_bridge/cli/__init__.py the combined data holds, and the
+    files left beside it."""
+    tmp_path.mkdir(exist_ok=True)
+    (tmp_path / "test_child.py").write_text(CHILD_TEST)
+    data = tmp_path / "data" / ".coverage"
+    data.parent.mkdir()
+    # As in a run of its own: no coverage of this run's passes to it.
+    env = {k: v for k, v in os.environ.items() if not k.startswith("COVERAGE_")}
+    env["COVERAGE_FILE"] = str(data)
+    done = subprocess.run(
+        [sys.executable, "-m", "pytest", "-p", "no:cacheprovider", "-p", "no:xdist", "-q",
+         "--rootdir", str(tmp_path), "-c", str(config), "--cov=plan_bridge",
+         f"--cov-config={config}", "--cov-report=", str(tmp_path / "test_child.py")],
+        capture_output=True, text=True, cwd=tmp_path, env=env, timeout=100,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stdout + done.stderr
+    from coverage import CoverageData
+
+    combined = CoverageData(str(data))
+    combined.read()
+    cli = str(ROOT / "src" / "plan_bridge" / "cli" / "__init__.py")
+    left = sorted(p.name for p in data.parent.iterdir() if p != data)
+    return set(combined.lines(cli) or ()), left
+
+
+@pytest.mark.timeout(120)
+def test_coverage_counts_the_programs_a_test_starts(tmp_path: Path) -> None:
+    """`./dev test` measures coverage with pyproject.toml's [tool.coverage.run]: a
+    `python -m plan_bridge` a test starts is measured too, its data combined with the
+    rest and no data file left behind. Without those settings it is not measured."""
+    lines, left = measured_lines(tmp_path / "with", ROOT / "pyproject.toml")
+    assert len(lines) > 10, lines  # main() ran, in the child process
+    assert left == []
+    plain = tmp_path / "without" / "pytest.ini"
+    plain.parent.mkdir()
+    plain.write_text("[pytest]\n")
+    lines, left = measured_lines(tmp_path / "without", plain)
+    assert lines == set() and left == []
