@@ -19,6 +19,7 @@ import threading
 from collections.abc import Callable, Iterable, Iterator, Mapping
 
 from plan_bridge.belief.facts import FactSnapshot, Observation, values_of
+from plan_bridge.belief.whereabouts import locate
 from plan_bridge.pddl.task import Fact, FactLike, parse_fact
 
 __all__ = ["Belief"]
@@ -34,8 +35,15 @@ class Belief:
     """A thread-safe set of true ground facts (closed world: absent means false)."""
 
     def __init__(
-        self, facts: Iterable[FactLike] = (), values: Mapping[Fact, float] | None = None
+        self,
+        facts: Iterable[FactLike] = (),
+        values: Mapping[Fact, float] | None = None,
+        *,
+        whereabouts: bool = False,
     ) -> None:
+        #: Things are at one place, and a thing looked for and not seen is lost, with
+        #: where it is not (:mod:`~plan_bridge.belief.whereabouts`): a world with a map.
+        self.whereabouts = whereabouts
         self._facts = _LiveFacts(parse_fact(f) for f in facts)
         self._facts.values = dict(values if values is not None else values_of(facts))
         self._lock = threading.Lock()
@@ -98,6 +106,8 @@ class Belief:
         """Record observations; returns those that changed the belief."""
         changed: list[Observation] = []
         with self._lock:
+            if self.whereabouts:
+                observations = locate(self._facts, list(observations))
             for fact, truth in observations:
                 if not isinstance(truth, bool):
                     if self._facts.values.get(fact) != truth:

@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any
 
 import smach
 from plan_bridge.belief import Belief, Observation, describe_observation, normalise_observations
+from plan_bridge.belief.whereabouts import ABSENT
 from plan_bridge.errors import FactError, PlanBridgeError
 from plan_bridge.execution.compile import (
     CompiledPlan,
@@ -132,10 +133,12 @@ class Executive(PlanContainer):
         self.task_view = task_view
         # The goal a knowledge base of the whole world set (its task: the view's).
         self._goal: tuple[Fact, ...] = ()
+        # The places the belief says lost objects are not (a search's progress).
+        self._searched = 0
         if belief is not None:
             self.belief = belief
         elif task_view is not None:
-            self.belief = Belief(task_view.belief())
+            self.belief = Belief(task_view.belief(), whereabouts=True)
             adopt_map_atoms(task_view, self.belief, task, self.model.initial_values())
         else:
             self.belief = Belief(task.initial_facts, self.model.initial_values())
@@ -505,10 +508,19 @@ class Executive(PlanContainer):
         view = self.task_view
         if view is None:
             return
+        facts = self.belief.facts
+        searched = sum(1 for f in facts if f[0] == ABSENT)
+        if searched > self._searched and self._replanner is not None:
+            # A place where a lost object is not is what a search is for, not a failure:
+            # the replan that looks further is not counted against the budget.
+            self._replanner.budgeted_calls = max(0, self._replanner.budgeted_calls - 1)
+        self._searched = searched
         try:
-            task = view.task_for(self.belief.facts, self._goal or self.task.goal_facts)
+            task = view.task_for(facts, self._goal or self.task.goal_facts)
         except PlanBridgeError as exc:
-            raise MissionEnded("aborted", f"no task for the belief: {exc}") from exc
+            # A verdict (an object in none of the places it may be in) is the reason.
+            why = str(exc) if getattr(exc, "verdict", False) else f"no task for the belief: {exc}"
+            raise MissionEnded("aborted", why) from exc
         if task is self.task:
             return
         self._use_task(task)

@@ -26,6 +26,8 @@
     (IsLocked ?g - gate)
     (Has ?l - fixture ?o - item)
     (Searched ?s - spot)
+    (absent ?o - item ?s - spot)
+    (may-hold ?s - spot ?o - item)
     (bot-ready ?r - bot)
     (route ?a ?b - spot)
     (hall-ends ?a ?b - spot ?h - hall)
@@ -137,6 +139,26 @@
                     (at start (> (battery-level ?r) 0)))
     :effect (and (at start (not (bot-ready ?r)))
                  (at end (Searched ?s))
+                 (at end (bot-ready ?r))))
+
+  ; An object whose place the belief does not know (it was not where it was believed:
+  ; plan_bridge.belief.whereabouts) is looked for at the places it may be in
+  ; ((may-hold ?s ?o): the likely places not searched yet, plan_bridge.maps.search).
+  ; The plan assumes it is found there; when it is not, the step fails, the belief says
+  ; where it is not, and the replan looks at the next place.
+  (:durative-action search
+    :parameters (?r - bot ?o - item ?s - spot ?l - fixture)
+    :duration (= ?duration 1)
+    :condition (and (at start (bot-ready ?r))
+                    (over all (At ?r ?s))
+                    (at start (may-hold ?s ?o))
+                    (at start (not (absent ?o ?s)))
+                    (at start (spawn-of ?s ?l))
+                    (over all (IsOpen ?l))
+                    (at start (> (battery-level ?r) 0)))
+    :effect (and (at start (not (bot-ready ?r)))
+                 (at end (At ?o ?s))
+                 (at end (Has ?l ?o))
                  (at end (bot-ready ?r))))
 
   (:durative-action charge

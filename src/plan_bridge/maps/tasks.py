@@ -35,6 +35,7 @@ from plan_bridge.belief import FactSnapshot, values_of
 from plan_bridge.errors import PlanBridgeError
 from plan_bridge.maps.graph import PlaceMap
 from plan_bridge.maps.model import WorldModel
+from plan_bridge.maps.search import ObjectNotFoundError, search_tiers
 from plan_bridge.pddl.spec import ProblemSpec
 from plan_bridge.pddl.task import Fact, PlanningTask, task_from_spec
 
@@ -50,7 +51,9 @@ __all__ = [
 DOMAIN_PATH = Path(__file__).with_name("domain.pddl")
 """The map domain shipped with plan_bridge."""
 #: The facts of a task that come from the map (not from the belief's state).
-MAP_PREDICATES = frozenset({"route", "hall-ends", "spawn-of", "reaches-gate", "is-charger"})
+MAP_PREDICATES = frozenset(
+    {"route", "hall-ends", "spawn-of", "reaches-gate", "is-charger", "may-hold"}
+)
 #: The numbers of a task that come from the map and the robots' make.
 MAP_FUNCTIONS = frozenset({"metres", "drain-per-metre", "top-speed"})
 #: Tasks kept (per what they hold), so a task comes back the same object.
@@ -82,6 +85,8 @@ class _Needs:
     places: dict[str, None] = field(default_factory=dict)
     items: dict[str, None] = field(default_factory=dict)
     gates: dict[str, None] = field(default_factory=dict)
+    searches: dict[str, list[str]] = field(default_factory=dict)
+    """A lost object -> the places to look for it at (the best tier left)."""
 
     def place(self, name: str | None) -> None:
         if name:
@@ -164,6 +169,7 @@ class RouteTasks:
         route round (by default those the belief does not hold open; a part of a task
         is made with the task's own, :meth:`closed_for`)."""
         goal = tuple(goal)
+        self._learn(facts)
         if closed is None:
             closed = self._closed(facts)
         needs = self._needs(facts, goal, robots, closed)
@@ -224,9 +230,33 @@ class RouteTasks:
         for atom in goal:
             self._goal_needs(atom, needs, where, held)
         for item in list(needs.items):
-            needs.place(where.get(item))
+            if item in where or item in held:
+                needs.place(where.get(item))
+            else:
+                self._search_needs(facts, item, needs)
         self._gates_needed(facts, closed, needs)
         return needs
+
+    def _search_needs(self, facts: FactSnapshot, item: str, needs: _Needs) -> None:
+        """A lost object: the places of the best tier left to look for it at
+        (:mod:`plan_bridge.maps.search`); none left: :class:`ObjectNotFoundError`."""
+        tiers = search_tiers(self.model, facts, item)
+        if not tiers:
+            searched = [self.name(f[2]) for f in facts if f[0] == "absent" and f[1] == item]
+            raise ObjectNotFoundError(self.name(item), searched)
+        needs.searches[item] = tiers[0]
+        for place in tiers[0]:
+            needs.place(place)
+
+    def _learn(self, facts: Collection[Fact]) -> None:
+        """Objects the belief has at a place that the map does not know (seen on the way
+        by a robot) join its objects: a goal may name them, a task hold them."""
+        known = self._names
+        for fact in facts:
+            if fact[0] == "at" and len(fact) == 3 and fact[1] not in known:
+                with self._lock:
+                    self.model.items.setdefault(fact[1], None)
+                    known[fact[1]] = fact[1]
 
     def _gates_needed(self, facts: FactSnapshot, closed: frozenset[str], needs: _Needs) -> None:
         """The chargers; the hallways closed but not locked, and their doorways; the
@@ -323,6 +353,8 @@ class RouteTasks:
                     init.add(("route", first, second))
                     values[("metres", first, second)] = metres
         self._gate_facts(needs, init, values)
+        for item, spots in needs.searches.items():
+            init.update(("may-hold", spot, item) for spot in spots)
         return ProblemSpec(
             self.domain_text,
             f"{_pddl_name(model.name)}-task",

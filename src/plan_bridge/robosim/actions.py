@@ -205,7 +205,7 @@ def follow(
 def act(
     world: RobosimWorld, robot: Any, action: str, args: list[str], preempted: Preempted
 ) -> ActionResult:
-    """One action that is not a drive: pick, place, open, close, detect or charge."""
+    """One action that is not a drive: pick, place, open, close, detect, search or charge."""
     from pyrobosim.planning.actions import TaskAction
 
     world.begin(robot)
@@ -214,6 +214,8 @@ def act(
         return ActionResult("CANCELED", f"{action} preempted")
     if action == "charge":
         result = _charge(world, robot, args)
+    elif action == "search":
+        result = _check_place(world, robot, action, args) or _search(world, args)
     elif action in ("open", "close") and world.name(args[1]) in world.model.halls:
         result = _check_place(world, robot, action, args) or _door(world, robot, action, args)
     else:
@@ -239,7 +241,9 @@ def _check_place(
     world: RobosimWorld, robot: Any, action: str, args: list[str]
 ) -> ActionResult | None:
     """The step's place is where the robot is (pyrobosim acts where the robot stands)."""
-    spot = world.name(args[2] if action in ("pick", "place", "open", "close") else args[1])
+    spot = world.name(
+        args[2] if action in ("pick", "place", "open", "close", "search") else args[1]
+    )
     if action in ("open", "close"):
         here = world.spot_of(robot)
         if here != spot:
@@ -252,6 +256,21 @@ def _check_place(
     if here != spot:
         return ActionResult("PRECONDITION_FAILURE", f"{robot.name} is at {here}, not at {spot}")
     return None
+
+
+def _search(world: RobosimWorld, args: list[str]) -> ActionResult:
+    """Look for an object at the spawns of the robot's place: found, or not there
+    (the LOOK after it reports what is there, and where the object is not)."""
+    item, place = world.name(args[1]), world.name(args[2])
+    info = world.model.places.get(place)
+    location = world.sim.get_entity_by_name(info.fixture) if info and info.fixture else None
+    if location is None or not location.is_open:
+        return ActionResult("PRECONDITION_FAILURE", f"cannot see into {args[3]}: it is closed")
+    for spawn in info.spawns if info is not None else ():
+        entity = world.sim.get_entity_by_name(spawn)
+        if entity is not None and any(child.name == item for child in entity.children):
+            return ActionResult("SUCCESS", f"{item} found at {spawn}")
+    return ActionResult("POSTCONDITION_FAILURE", f"{item} is not at {place}")
 
 
 def _charge(world: RobosimWorld, robot: Any, args: list[str]) -> ActionResult:

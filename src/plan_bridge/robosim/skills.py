@@ -8,7 +8,8 @@ Every skill is a small StateMachine acting on a :class:`~.world.RobosimWorld`:
   the drive there) -> ``LOOK``;
 * ``cross``: ``PLAN`` (the hallway's centre line, refused when the hallway is closed)
   -> ``DRIVE`` -> ``LOOK``;
-* ``pick``, ``place``, ``open``, ``close``, ``detect``, ``charge``: ``ACT`` -> ``LOOK``.
+* ``pick``, ``place``, ``open``, ``close``, ``detect``, ``search``, ``charge``: ``ACT`` ->
+  ``LOOK`` (``search`` succeeds when the object is at the place, and fails when not).
 
 ``PLAN``, ``DRIVE`` and ``ACT`` keep pyrobosim's ``ExecutionStatus`` in the userdata
 (``status``, ``message``); ``LOOK`` reports what the robot sees afterwards
@@ -40,6 +41,7 @@ ACTIONS: dict[str, tuple[str, ...]] = {
     "open": ("robot", "gate", "place"),
     "close": ("robot", "gate", "place"),
     "detect": ("robot", "place", "location"),
+    "search": ("robot", "object", "place", "location"),
     "charge": ("robot", "place", "location"),
 }
 _RESULT_KEYS = ["status", "message"]

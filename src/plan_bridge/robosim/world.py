@@ -57,6 +57,7 @@ ACTION_SECONDS = {
     "open": 3.0,
     "close": 3.0,
     "detect": 1.0,
+    "search": 1.0,
     "charge": 10.0,
 }
 #: The robot actions that get seeded ExecutionOptions (faults).
@@ -239,6 +240,23 @@ class RobosimWorld:
                 return True, f"{event.target} is held by a robot: not moved ({event.origin})"
             ok = bool(world.update_object(obj, loc=event.to))
             return ok, f"{event.target} moved to {obj.parent.name}"
+        if event.kind == "remove":
+            obj = world.get_object_by_name(event.target)
+            if obj is None:
+                return True, f"remove {event.target}: no such object ({event.origin})"
+            if any(r.manipulated_object is obj for r in world.robots):
+                return True, f"{event.target} is held by a robot: not removed ({event.origin})"
+            with self.quietly():
+                world.remove_object(obj, show=False)
+            return True, f"{event.target} removed"
+        if event.kind == "add":
+            with self.quietly():
+                added = world.add_object(
+                    name=event.target, category=event.category, parent=event.to, show=False
+                )
+            if added is None:
+                return True, f"add {event.target}: no room on {event.to} ({event.origin})"
+            return True, f"{event.target} ({event.category}) added on {added.parent.name}"
         if event.kind in ("close", "lock") and any(
             robot.location is not None and robot.location.name == event.target
             for robot in world.robots
@@ -389,11 +407,22 @@ class RobosimWorld:
             entity = self.sim.get_entity_by_name(name)
             if entity is not None:
                 here |= {child.name for child in entity.children}
+                for child in entity.children:
+                    if child.name not in self.model.items:
+                        self.learn_object(child.name, name, str(child.category or ""))
         single = len(self.model.gates[fixture].spawns) == 1
         for item in self.model.items:
             seen[_f("At", item, place)] = item in here
             if item in here or single:
                 seen[_f("Has", fixture, item)] = item in here
+
+    def learn_object(self, name: str, spawn: str | None, category: str) -> None:
+        """An object the robots had never heard of (seen at a spawn): it joins the map's
+        objects, so sensing reports it and goals may name it."""
+        with self._lock:
+            self.model.items.setdefault(name, spawn)
+            self.model.item_categories.setdefault(name, category)
+            self._names[name.lower()] = name
 
     def _visible(self, gate: str, room: str, spot: str) -> bool:
         place = self.model.places.get(spot)
