@@ -88,14 +88,6 @@ def test_a_module_over_600_lines_says_why_at_its_top() -> None:
 #: files sorted. The list only shrinks: a circle that is gone must leave it
 #: (test_every_listed_circle_still_exists), and no other may appear.
 KNOWN_FILE_CYCLES_TO_REMOVE = {
-    # Plans compile into layers or into a temporal dispatcher whose steps compile back.
-    (
-        "plan_bridge.execution.compile",
-        "plan_bridge.execution.temporal",
-        "plan_bridge.execution.timed_step",
-    ),
-    # Mission requests act on the executive, which serves them.
-    ("plan_bridge.execution.control", "plan_bridge.execution.executive"),
     # A mission's target can be a world target, which is a kind of mission target.
     ("plan_bridge.missions.mission", "plan_bridge.missions.world_target"),
     # The pyrobosim world adopts steps and draws itself; both need the world.

@@ -54,9 +54,6 @@ KEPT_DECLARATIONS: dict[Key, str] = {
     ("smach/user_data.py", "smach/user_data.py", "remapping: Mapping[str, str] | None = None,"): (
         "make_remapper takes what Remapper's constructor takes"
     ),
-    ("plan_bridge/execution/compile.py", "plan_bridge/execution/timed_step.py", "belief,"): (
-        "TimedStep.__init__ passes StepState's arguments on, as compile_layer passes them"
-    ),
     ("smach/events.py", "smach/introspection/events.py", "__all__ = ["): (
         "smach.introspection.events re-exports smach.events' names where user code imports them"
     ),
@@ -65,17 +62,6 @@ KEPT_DECLARATIONS: dict[Key, str] = {
 #: Copies in plan_bridge.execution and .orders and in the viewer, which another
 #: change is reworking (issue 38); they go there.
 KNOWN_COPIES_TO_REMOVE: set[Key] = {
-    ("plan_bridge/execution/compile.py", "plan_bridge/execution/timed_step.py", "def __init__("),
-    (
-        "plan_bridge/execution/compile.py",
-        "plan_bridge/execution/compile.py",
-        "steps: Sequence[PlanStep],",
-    ),
-    (
-        "plan_bridge/execution/temporal.py",
-        "plan_bridge/execution/temporal.py",
-        "model: ActionModel,",
-    ),
     ("smach/introspection/static/control.js", "smach/introspection/static/orders.js", "}"),
 }
 

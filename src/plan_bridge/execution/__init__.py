@@ -2,7 +2,9 @@
 
 * :mod:`~plan_bridge.execution.semantics`: grounded actions, preconditions and
   effects, plan validation from a state;
-* :mod:`~plan_bridge.execution.world`: the believed world state;
+* :mod:`~plan_bridge.execution.world`: the World protocol (what the executive needs of
+  the world it acts on);
+* :mod:`~plan_bridge.execution.steps`: a plan's steps as SMACH states;
 * :mod:`~plan_bridge.execution.compile`: a plan -> a SMACH machine of skills;
 * :mod:`~plan_bridge.execution.temporal`: a temporal plan -> a dispatcher of timed
   steps (with :mod:`~plan_bridge.execution.temporal_network`,

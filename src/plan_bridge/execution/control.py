@@ -34,8 +34,8 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
 
 from plan_bridge.errors import FactError, PlanBridgeError
-from plan_bridge.execution.compile import StepState
 from plan_bridge.execution.replanner import MissionEnded
+from plan_bridge.execution.steps import StepState
 from plan_bridge.pddl.source import SourceText
 from plan_bridge.pddl.task import Fact, FactLike, PlanningTask, format_fact, parse_fact
 from plan_bridge.pddl.up_runtime import ensure_unified_planning

@@ -21,26 +21,26 @@ import bisect
 import threading
 import time
 from collections.abc import Callable, Iterable, Sequence
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import smach
 from plan_bridge.belief import Belief, Observation, describe_observation, normalise_observations
 from plan_bridge.belief.whereabouts import ABSENT
 from plan_bridge.errors import FactError, PlanBridgeError
-from plan_bridge.execution.compile import (
-    CompiledPlan,
-    PlanContainer,
-    PlanHold,
-    StepRecord,
-    StepState,
-    compile_plan,
-)
+from plan_bridge.execution.compile import compile_plan
 from plan_bridge.execution.events import ExecutiveDecision, PlanComputed
 from plan_bridge.execution.plan_cache import PlanCache
 from plan_bridge.execution.policy import ExecutionReport, ReplanPolicy
 from plan_bridge.execution.repair import Recovery, RecoveryStrategy, default_ladder
 from plan_bridge.execution.replanner import MissionEnded, Replanner
 from plan_bridge.execution.semantics import ActionModel
+from plan_bridge.execution.steps import (
+    CompiledPlan,
+    PlanContainer,
+    PlanHold,
+    StepRecord,
+    StepState,
+)
 from plan_bridge.execution.task_view import TaskView, adopt_map_atoms
 from plan_bridge.execution.temporal import TemporalDispatch
 from plan_bridge.execution.world import World
@@ -51,13 +51,23 @@ from plan_bridge.skills.registry import SkillRegistry
 from smach.introspection.events import Event, stamp
 
 if TYPE_CHECKING:
-    from plan_bridge.execution.control import MissionControl
     from plan_bridge.execution.knowledge_link import KnowledgeLink
     from plan_bridge.pddl.knowledge import KnowledgeBase
 
-__all__ = ["ExecutionReport", "Executive", "ReplanPolicy"]
+__all__ = ["ExecutionReport", "Executive", "Operator", "ReplanPolicy"]
 
 OUTCOMES = ("succeeded", "aborted", "preempted")
+
+
+class Operator(Protocol):
+    """What the executive asks of an operator's requests where its loop would stop or
+    start the next plan (:class:`~plan_bridge.execution.control.MissionControl`)."""
+
+    def pending(self) -> object | None:
+        """The request waiting to be taken, if any."""
+
+    def take(self, executive: Executive, plan: list[PlanStep]) -> list[PlanStep]:
+        """Carry out the request waiting (in the executive's thread); the plan to run next."""
 
 
 class Executive(PlanContainer):
@@ -86,7 +96,7 @@ class Executive(PlanContainer):
     """
 
     #: Operator requests (skip, replan, new goal, abort): see execution/control.py.
-    operator: MissionControl | None = None
+    operator: Operator | None = None
 
     def __init__(
         self,
@@ -159,7 +169,7 @@ class Executive(PlanContainer):
         self._records: dict[int, StepRecord] = {}
         self._in_mission = False  # between the start and the end of run_children
         #: Stops the plan in force from starting steps, its running steps finishing
-        #: (:class:`~plan_bridge.execution.compile.PlanHold`; what orders use).
+        #: (:class:`~plan_bridge.execution.steps.PlanHold`; what orders use).
         self.hold = PlanHold()
         #: The knowledge base the mission follows (None: the task's problem).
         self.knowledge: KnowledgeBase | None = None

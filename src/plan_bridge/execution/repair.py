@@ -50,10 +50,10 @@ from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
 from plan_bridge.belief import Belief
-from plan_bridge.execution.compile import StepRecord
 from plan_bridge.execution.policy import ExecutionReport, ReplanPolicy
 from plan_bridge.execution.replanner import MissionEnded, Replanner
 from plan_bridge.execution.semantics import ActionModel
+from plan_bridge.execution.steps import StepRecord
 from plan_bridge.execution.temporal_network import is_temporal
 from plan_bridge.pddl.task import Fact, format_fact, parse_fact
 from plan_bridge.planning.types import PlanStep

@@ -72,7 +72,8 @@ from typing import Any, Unpack
 import smach
 from plan_bridge.belief import Belief
 from plan_bridge.execution.clock import WALL_CLOCK, Clock, Ticket, clock_of
-from plan_bridge.execution.compile import (
+from plan_bridge.execution.semantics import ActionModel
+from plan_bridge.execution.steps import (
     STEP_OUTCOMES,
     CompiledPlan,
     PlanContainer,
@@ -80,7 +81,6 @@ from plan_bridge.execution.compile import (
     StepOptions,
     build_steps,
 )
-from plan_bridge.execution.semantics import ActionModel
 from plan_bridge.execution.temporal_network import (
     EPSILON,
     Edge,
@@ -171,7 +171,7 @@ class TemporalDispatch(PlanContainer):
         *,
         time_scale: float = 0.0,
         on_failure: str = "finish",
-        clock: Clock | None = None,
+        clock: Clock = WALL_CLOCK,
         hold: PlanHold | None = None,
     ) -> None:
         if on_failure not in POLICIES:
@@ -186,7 +186,7 @@ class TemporalDispatch(PlanContainer):
         self.belief = belief
         self.time_scale = time_scale
         self.on_failure = on_failure
-        self.clock = WALL_CLOCK if clock is None else clock
+        self.clock = clock
         #: Stops new starts while the running steps finish (:class:`PlanHold`).
         self.hold = hold
         #: Clock seconds per plan second: 1 on a simulated clock, else ``time_scale``.
@@ -529,7 +529,7 @@ def compile_temporal(
     :func:`~plan_bridge.execution.compile.compile_plan`). The dispatch follows
     ``clock``, by default the clock of the ``world`` option (the wall clock without one)."""
     steps = list(steps)
-    labels, states = build_steps(TimedStepState, steps, skills, model, belief, **options)
+    labels, states = build_steps(TimedStepState, steps, skills, model, belief, options)
     dispatch = TemporalDispatch(
         steps,
         states,

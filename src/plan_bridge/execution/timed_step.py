@@ -15,7 +15,7 @@ calls once its action has begun).
 
 The dispatcher that runs the step talks to it through one :class:`StepHooks` object
 (its clock, its time scale, and the calls at the start point, before the end and on a
-failure), given at construction or bound for each run with :meth:`TimedStepState.bind`.
+failure), bound for each run with :meth:`TimedStepState.bind`.
 """
 
 from __future__ import annotations
@@ -26,14 +26,10 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import smach
-from plan_bridge.belief import Belief
-from plan_bridge.execution.compile import PlanHold, StepRecord, StepState
-from plan_bridge.execution.semantics import GroundAction
+from plan_bridge.execution.steps import StepRecord, StepState
 from plan_bridge.execution.timeline import ActionEnded, ActionStarted, Timing
-from plan_bridge.execution.world import World
 from plan_bridge.pddl.task import Fact
-from plan_bridge.planning.types import PlanStep
-from plan_bridge.skills.registry import STEP_KEYS, Skill
+from plan_bridge.skills.registry import STEP_KEYS
 
 __all__ = [
     "BEGUN_KEY",
@@ -80,39 +76,18 @@ class StepHooks:
 
 class TimedStepState(StepState):
     """A step of a temporal plan: at-start checks and effects when it starts, over-all
-    conditions watched while its skill runs, at-end checks and effects on success."""
+    conditions watched while its skill runs, at-end checks and effects on success. Made
+    as a :class:`~plan_bridge.execution.steps.StepState` is; its ``hold`` is not used
+    (the dispatcher holds a temporal plan, not its steps)."""
 
     provided_keys = TIMED_STEP_KEYS
 
-    def __init__(
-        self,
-        index: int,
-        ground: GroundAction,
-        belief: Belief,
-        skill: Skill | None,
-        *,
-        check_preconditions: bool = True,
-        on_finished: Callable[[StepRecord], None] | None = None,
-        world: World | None = None,
-        on_started: Callable[[int, PlanStep], None] | None = None,
-        hold: PlanHold | None = None,
-        hooks: StepHooks | None = None,
-    ) -> None:
-        super().__init__(
-            index,
-            ground,
-            belief,
-            skill,
-            check_preconditions=check_preconditions,
-            on_finished=on_finished,
-            world=world,
-            on_started=on_started,
-            hold=hold,  # (unused: the dispatcher holds a temporal plan, not its steps)
-        )
-        step = ground.step
+    def _set_up(self) -> None:
+        step = self.ground.step
         self.timing = Timing(step.start or 0.0, step.duration or 0.0)
-        #: How the step reaches the dispatcher that runs it (:meth:`bind`).
-        self.hooks = StepHooks() if hooks is None else hooks
+        #: How the step reaches the dispatcher that runs it (:meth:`bind`); a step run
+        #: on its own: the defaults.
+        self.hooks = StepHooks()
         self._begun_once = threading.Lock()
         self._has_begun = False
         #: Held from reading the belief to applying the effects computed from it (the

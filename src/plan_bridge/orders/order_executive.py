@@ -16,7 +16,7 @@ the mission goes on while orders may still come. Its loop:
 4. run the plan; the orders it serves become ``assigned`` to the robots whose steps
    achieve them (:mod:`~plan_bridge.orders.assignment`) and ``active`` when one of
    their steps starts. An order arriving (or cancelled) while the plan runs *holds* the
-   plan (:class:`~plan_bridge.execution.compile.PlanHold`): no new step starts, the
+   plan (:class:`~plan_bridge.execution.steps.PlanHold`): no new step starts, the
    running ones finish, and the loop plans again with it. No running step is stopped
    for an order;
 5. after a failure, recover as the executive does (retry, repair, replan) within the
@@ -38,11 +38,11 @@ from typing import Any
 from plan_bridge.belief import FactSnapshot, values_of
 from plan_bridge.errors import PlanBridgeError
 from plan_bridge.execution.clock import clock_of
-from plan_bridge.execution.compile import StepRecord
 from plan_bridge.execution.control import task_with_goal
 from plan_bridge.execution.executive import Executive
 from plan_bridge.execution.repair import Recovery
 from plan_bridge.execution.replanner import MissionEnded
+from plan_bridge.execution.steps import StepRecord
 from plan_bridge.orders.assignment import agents_of, order_work
 from plan_bridge.orders.book import OrderBook, OrderBookError
 from plan_bridge.orders.order import OrderChanged, OrderState, OrderStatus

@@ -11,8 +11,9 @@ import pytest
 
 import smach
 from plan_bridge.belief import Belief
-from plan_bridge.execution.compile import CompiledPlan, PlanHold, StepRecord, compile_plan
+from plan_bridge.execution.compile import compile_plan
 from plan_bridge.execution.semantics import ActionModel
+from plan_bridge.execution.steps import CompiledPlan, PlanHold, StepRecord
 from plan_bridge.execution.temporal import (
     ActionEnded,
     ActionStarted,

@@ -47,7 +47,8 @@ def step_with(
         on_begun=lambda: calls.append("begun"),
         on_failed=lambda failed: calls.append(f"failed {failed}"),
     )
-    state = TimedStepState(1, model.ground(step), belief, None, hooks=hooks)
+    state = TimedStepState(1, model.ground(step), belief, None)
+    state.bind(hooks)
     state.add("SKILL", Ends(outcome))
     return state, belief
 
