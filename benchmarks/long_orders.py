@@ -109,7 +109,8 @@ def run(
     *, kill_after: float | None = None, sample: float = 1.0,
 ) -> dict[str, Any]:  # fmt: skip
     """One journaled run; its figures (``--json``), wall time and RSS samples; with
-    ``kill_after`` (wall seconds), killed then and resumed."""
+    ``kill_after`` (wall seconds after the journal appeared, i.e. the mission began),
+    killed then and resumed."""
     command = _cli(
         "run", str(folder), "--orders", str(orders), "--events", str(events),
         "--seed", str(args.seed), "--fail-rate", str(args.fail_rate),
@@ -123,12 +124,15 @@ def run(
         process = subprocess.Popen(command, stdout=out_stream, stderr=err_stream, text=True)
     samples: list[tuple[float, float]] = []
     killed = False
+    began: float | None = None  # when the journal appeared: the mission began
     while process.poll() is None:
         now = time.monotonic() - started
         mb = rss_mb(process.pid)
         if mb is not None:
             samples.append((now, mb))
-        if kill_after is not None and now >= kill_after:
+        if began is None and journal.exists():
+            began = now
+        if kill_after is not None and began is not None and now - began >= kill_after:
             os.kill(process.pid, signal.SIGKILL)
             killed = True
             break
@@ -147,6 +151,7 @@ def run(
         raise SystemExit(f"the run failed ({process.returncode}):\n{err[-3000:]}")
     figures = json.loads(out)
     return {
+        "mission_s": (time.monotonic() - started) - (began or 0.0),
         "figures": figures,
         "wall_s": time.monotonic() - started,
         "samples": samples,
@@ -202,14 +207,18 @@ def main() -> None:
     parser.add_argument("--parcels", type=int, default=6)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--fail-rate", type=float, default=0.2)
-    parser.add_argument("--kills", type=int, default=1, help="killed-and-resumed runs")
+    parser.add_argument(
+        "--kills", type=int, help="killed-and-resumed runs (default 1; 0 with --quick)"
+    )
     parser.add_argument("--warm-up", type=float, default=0.1, help="share of the run")
     parser.add_argument("--sample", type=float, default=1.0, help="seconds between samples")
-    parser.add_argument("--quick", action="store_true", help="20 simulated minutes, no kill")
+    parser.add_argument("--quick", action="store_true", help="20 simulated minutes, 4 rooms")
     parser.add_argument("--json", metavar="FILE", help="write every figure to FILE")
     args = parser.parse_args()
     if args.quick:
-        args.hours, args.kills, args.rooms, args.robots, args.sample = 1 / 3, 0, 4, 2, 0.2
+        args.hours, args.rooms, args.robots, args.sample = 1 / 3, 4, 2, 0.2
+    if args.kills is None:
+        args.kills = 0 if args.quick else 1
     with tempfile.TemporaryDirectory(prefix="long-orders-") as tmp:
         folder = Path(tmp) / "building"
         orders, events = build(folder, args)
@@ -257,7 +266,7 @@ def main() -> None:
         )
         rng = random.Random(args.seed)
         for number in range(args.kills):
-            at = rng.uniform(0.1, 0.9) * whole["wall_s"]
+            at = rng.uniform(0.1, 0.9) * whole["mission_s"]
             path = Path(tmp) / f"killed-{number}.jsonl"
             again = run(folder, orders, events, path, args, kill_after=at, sample=args.sample)
             statuses = journal_figures(path, again["figures"]["actions_executed"])["statuses"]
@@ -265,10 +274,10 @@ def main() -> None:
             differ = sorted(k for k in statuses.keys() | journal["statuses"].keys()
                             if statuses.get(k) != journal["statuses"].get(k))  # fmt: skip
             result["resumes"].append(
-                {"killed_at_wall_s": round(at, 1), "same_orders": same, "differ": differ}
+                {"killed_into_mission_s": round(at, 1), "same_orders": same, "differ": differ}
             )
             print(
-                f"resume: killed at {at:.0f} s wall, resumed: "
+                f"resume: killed {at:.0f} s (wall) into the mission, resumed: "
                 + ("the same orders done, failed and refused" if same else f"differ: {differ}")
             )
         if args.json:
