@@ -35,7 +35,7 @@ from plan_bridge.belief import FactSnapshot, values_of
 from plan_bridge.errors import PlanBridgeError
 from plan_bridge.maps.graph import PlaceMap
 from plan_bridge.maps.model import WorldModel
-from plan_bridge.maps.search import ObjectNotFoundError, search_tiers
+from plan_bridge.maps.search import ObjectNotFoundError, search_order
 from plan_bridge.pddl.spec import ProblemSpec
 from plan_bridge.pddl.task import Fact, PlanningTask, task_from_spec
 
@@ -233,19 +233,34 @@ class RouteTasks:
             if item in where or item in held:
                 needs.place(where.get(item))
             else:
-                self._search_needs(facts, item, needs)
+                self._search_needs(facts, item, needs, where, closed)
         self._gates_needed(facts, closed, needs)
         return needs
 
-    def _search_needs(self, facts: FactSnapshot, item: str, needs: _Needs) -> None:
-        """A lost object: the places of the best tier left to look for it at
-        (:mod:`plan_bridge.maps.search`); none left: :class:`ObjectNotFoundError`."""
-        tiers = search_tiers(self.model, facts, item)
-        if not tiers:
+    def _search_needs(
+        self,
+        facts: FactSnapshot,
+        item: str,
+        needs: _Needs,
+        where: dict[str, str],
+        closed: frozenset[str],
+    ) -> None:
+        """A lost object: the first places of the search order to look for it at, one
+        per robot (:mod:`plan_bridge.maps.search`); none left:
+        :class:`ObjectNotFoundError`."""
+        metres: dict[str, float] = {}
+        for robot in needs.robots:
+            at = where.get(robot)
+            lengths = self.graph.lengths_from(self.name(at), closed) if at else {}
+            for place, length in lengths.items():
+                lower = place.lower()
+                metres[lower] = min(length, metres.get(lower, length))
+        order = search_order(self.model, facts, item, metres)
+        if not order:
             searched = [self.name(f[2]) for f in facts if f[0] == "absent" and f[1] == item]
             raise ObjectNotFoundError(self.name(item), searched)
-        needs.searches[item] = tiers[0]
-        for place in tiers[0]:
+        needs.searches[item] = order[: max(1, len(needs.robots))]
+        for place in needs.searches[item]:
             needs.place(place)
 
     def _learn(self, facts: Collection[Fact]) -> None:

@@ -139,6 +139,7 @@ def snapshot_world(world: RobosimWorld) -> dict[str, Any]:
         objects.append(
             {
                 "name": obj.name,
+                "category": str(obj.category or ""),
                 "parent": obj.parent.name if obj.parent is not None else None,
                 "pose": [float(pose.x), float(pose.y), float(pose.get_yaw())],
             }
@@ -176,6 +177,27 @@ def snapshot_world(world: RobosimWorld) -> dict[str, Any]:
     }
 
 
+def _objects_as_in(world: RobosimWorld, entries: list[dict[str, Any]]) -> None:
+    """The objects of a snapshot, and only those: events took some away and added others
+    (an object added is put on its spawn, or any, if a robot held it)."""
+    wanted = {entry["name"] for entry in entries}
+    with world.quietly():
+        for obj in list(world.sim.objects):
+            if obj.name not in wanted:
+                world.sim.remove_object(obj, show=False)
+        for entry in entries:
+            if world.sim.get_object_by_name(entry["name"]) is not None:
+                continue
+            parent = entry["parent"] or world.spawn_names()[0]
+            world.sim.add_object(
+                name=entry["name"],
+                category=entry.get("category") or None,
+                parent=parent,
+                show=False,
+            )
+            world.learn_object(entry["name"], entry["parent"], entry.get("category") or "")
+
+
 def restore_world(world: RobosimWorld, data: dict[str, Any]) -> None:
     """Put a :func:`snapshot_world` back (the same world file)."""
     from plan_bridge.robosim.events import parse_events
@@ -193,6 +215,7 @@ def restore_world(world: RobosimWorld, data: dict[str, Any]) -> None:
         robot.battery_level = float(entry["battery"])
         if entry["holding"]:
             held[entry["holding"]] = robot
+    _objects_as_in(world, data["objects"])
     for entry in data["objects"]:
         if entry["name"] in held:
             continue
