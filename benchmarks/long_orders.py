@@ -185,16 +185,23 @@ def journal_figures(journal: Path, actions: int) -> dict[str, Any]:
     }
 
 
-def memory(samples: list[tuple[float, float]], warm_up: float) -> dict[str, float]:
+def memory(samples: list[tuple[float, float]], warm_up: float) -> dict[str, Any]:
+    """RSS after the warm-up, highest, at the end, the growth after the warm-up, and
+    the RSS at each tenth of the run (``by_tenth``: flat, or growing all along?)."""
     if not samples:
         return {}
     end = samples[-1][0]
     after = [mb for t, mb in samples if t >= warm_up * end] or [samples[-1][1]]
+    by_tenth = [
+        round(next((mb for t, mb in samples if t >= tenth / 10 * end), samples[-1][1]), 1)
+        for tenth in range(1, 11)
+    ]
     return {
         "after_warm_up_mb": after[0],
         "max_mb": max(mb for _, mb in samples),
         "end_mb": samples[-1][1],
         "growth_mb": max(after) - after[0],
+        "by_tenth": by_tenth,
     }
 
 
@@ -255,7 +262,8 @@ def main() -> None:
             print(
                 f"memory (RSS): {mem['after_warm_up_mb']:.0f} MB after warm-up, highest "
                 f"{mem['max_mb']:.0f} MB, end {mem['end_mb']:.0f} MB: growth "
-                f"{mem['growth_mb']:.1f} MB after warm-up"
+                f"{mem['growth_mb']:.1f} MB after warm-up; by tenths of the run: "
+                + " ".join(f"{mb:.0f}" for mb in mem["by_tenth"])
             )
         print(
             f"journal: {journal['bytes'] / 2**20:.1f} MB, "
