@@ -218,7 +218,13 @@ def test_run_with_ros_and_orders_open_serves_the_order_services(tmp_path: Path) 
         assert operator.statuses("o1") == ["queued", "assigned", "active", "done"]
         ok, text = operator.call("list")
         assert ok and json.loads(text)[0]["origin"] == "ros"
-        assert any(line.startswith("[order] o1 done") for line in lines)
+        # The run prints it on its stderr, which our reader thread gets when it gets to
+        # it: maybe after the status topic said so.
+        wait_until(
+            lambda: any(line.startswith("[order] o1 done") for line in lines),
+            "the run's [order] o1 done line",
+            10,
+        )
     finally:
         if operator is not None:
             operator.close()
