@@ -14,6 +14,9 @@ Cases (each run is ``plan-bridge run TARGET --goal GOAL --events EVENTS --seed N
   (the soda moved at a seeded moment to a seeded place of the house);
 * ``test_world moved``: pyrobosim's ``test_world``, ``(Holding robot soda)``,
   ``benchmarks/data/test_world_soda_moved.yaml``;
+* ``search moved 2 robots`` / ``search taken 2 robots``: the same on
+  ``world_two_robots.yaml`` (a second robot in the foyer), planned only: the robots
+  split the places to look at (``taken`` is compared with the one-robot sweep);
 * ``... taken``: the soda removed instead (``events/taken.yaml``,
   ``test_world_soda_taken.yaml``): the run must end with exit 1 (aborted), a reason
   naming the soda and the places searched, in at most the time of one **sweep** (the
@@ -22,7 +25,8 @@ Cases (each run is ``plan-bridge run TARGET --goal GOAL --events EVENTS --seed N
   centimetres).
 
 Per case and approach: goal rate, mean simulated time, time to find (simulated seconds
-until the robot saw the object again, runs that found it), distance driven.
+until the robot saw the object again, runs that found it), distance driven, places
+searched (where the object was looked for and not found).
 """
 
 from __future__ import annotations
@@ -43,6 +47,8 @@ SEARCH = ROOT / "domains" / "robosim_search"
 #: A planned search that finds nothing may take this share longer than the sweep.
 SWEEP_SLACK = 0.02
 DATA = ROOT / "benchmarks" / "data"
+#: ``find_and_fetch`` of goals.yaml (a world file names no goals file).
+FIND_AND_FETCH = "(and (At soda foyer_table_tabletop) (HandEmpty robot))"
 
 
 @dataclass(frozen=True)
@@ -54,6 +60,9 @@ class Case:
     events: Path
     item: str = "soda"
     taken: bool = False
+    robots: int = 1
+    sweep: str = ""
+    """The case whose scripted runs are the sweep of a taken case (default: itself)."""
 
 
 CASES = (
@@ -72,6 +81,22 @@ CASES = (
         taken=True,
     ),
     Case(
+        "search moved 2 robots",
+        str(SEARCH / "world_two_robots.yaml"),
+        FIND_AND_FETCH,
+        SEARCH / "events" / "moved.yaml",
+        robots=2,
+    ),
+    Case(
+        "search taken 2 robots",
+        str(SEARCH / "world_two_robots.yaml"),
+        FIND_AND_FETCH,
+        SEARCH / "events" / "taken.yaml",
+        taken=True,
+        robots=2,
+        sweep="search taken",
+    ),
+    Case(
         "test_world taken",
         "test_world",
         "(Holding robot soda)",
@@ -82,7 +107,7 @@ CASES = (
 
 
 def target_path(world: str) -> Path:
-    if Path(world).is_dir():
+    if Path(world).exists():
         return Path(world)
     from pyrobosim.utils.general import get_data_folder
 
@@ -103,10 +128,13 @@ def planned(case: Case, seed: int, fail_rate: float) -> dict[str, Any]:
     belief = mission.executive.belief
     found: dict[str, float] = {}
     lost = [False]
+    searched: set[str] = set()
 
     def watch() -> None:
         facts = belief.facts
-        if any(f[0] == ABSENT and f[1] == case.item for f in facts):
+        absent = {f[2] for f in facts if f[0] == ABSENT and f[1] == case.item}
+        searched.update(absent)
+        if absent:
             lost[0] = True
         at, held = places_of(facts)
         if lost[0] and (case.item in at or case.item in held) and "t" not in found:
@@ -124,6 +152,7 @@ def planned(case: Case, seed: int, fail_rate: float) -> dict[str, Any]:
             "sim": figures["sim_time_s"],
             "metres": figures["distance_m"],
             "found": found.get("t"),
+            "searched": len(searched),
         }
     finally:
         world.close()
@@ -157,9 +186,15 @@ def scripted(case: Case, seed: int, fail_rate: float) -> dict[str, Any]:
             "sim": figures["sim_time_s"],
             "metres": figures["distance_m"],
             "found": machine.userdata.found_at,
+            "searched": len(machine.userdata.searched) - (machine.userdata.found_at is not None),
         }
     finally:
         world.close()
+
+
+def approaches(case: Case) -> tuple[str, ...]:
+    """The scripted search is for one robot."""
+    return ("planned",) if case.robots > 1 else ("planned", "scripted")
 
 
 def one(job: tuple[str, Case, int, float]) -> tuple[str, Case, int, dict[str, Any]]:
@@ -183,7 +218,7 @@ def main(argv: list[str] | None = None) -> int:
     jobs = [
         (approach, case, seed, args.fail_rate)
         for case in chosen
-        for approach in ("planned", "scripted")
+        for approach in approaches(case)
         for seed in range(1, args.seeds + 1)
     ]
     results: dict[tuple[str, str], list[dict[str, Any]]] = {}
@@ -194,16 +229,16 @@ def main(argv: list[str] | None = None) -> int:
     print()
     print(
         "| case | approach | goal reached | mean sim s | mean time to find s | "
-        "mean distance m | ended as required |"
+        "mean distance m | mean places searched | ended as required |"
     )
-    print("|---|---|---:|---:|---:|---:|---:|")
+    print("|---|---|---:|---:|---:|---:|---:|---:|")
     for case in chosen:
-        for approach in ("planned", "scripted"):
+        for approach in approaches(case):
             runs = results.get((case.name, approach), [])
             reached = sum(1 for r in runs if r["goal"])
             finds = [float(r["found"]) for r in runs if r["found"] is not None]
             if case.taken:
-                sweeps = results.get((case.name, "scripted"), [])
+                sweeps = results.get((case.sweep or case.name, "scripted"), [])
                 ratios = [
                     float(r["sim"]) / max(1e-9, float(w["sim"]))
                     for r, w in zip(runs, sweeps, strict=True)
@@ -222,7 +257,8 @@ def main(argv: list[str] | None = None) -> int:
             print(
                 f"| {case.name} | {approach} | {reached}/{len(runs)} | "
                 f"{mean([float(r['sim']) for r in runs])} | {mean(finds)} | "
-                f"{mean([float(r['metres']) for r in runs])} | {ended} |"
+                f"{mean([float(r['metres']) for r in runs])} | "
+                f"{mean([float(r['searched']) for r in runs])} | {ended} |"
             )
     for case in chosen:
         for r in results.get((case.name, "planned"), []):

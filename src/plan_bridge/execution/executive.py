@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 import smach
 from plan_bridge.belief import Belief, Observation, describe_observation, normalise_observations
-from plan_bridge.belief.whereabouts import ABSENT
+from plan_bridge.belief.whereabouts import ABSENT, places_of
 from plan_bridge.errors import FactError, PlanBridgeError
 from plan_bridge.execution.compile import compile_plan
 from plan_bridge.execution.events import ExecutiveDecision, PlanComputed
@@ -145,6 +145,10 @@ class Executive(PlanContainer):
         self._goal: tuple[Fact, ...] = ()
         # The places the belief says lost objects are not (a search's progress).
         self._searched = 0
+        # Why the plan in force was stopped for a search (a lost object found while
+        # other steps still look for it elsewhere, or a place ruled out while other
+        # robots' steps run: _search_over), or "".
+        self._found = ""
         if belief is not None:
             self.belief = belief
         elif task_view is not None:
@@ -266,13 +270,22 @@ class Executive(PlanContainer):
                 plan = self.operator.take(self, plan)
             if self._knowledge_pending():  # the knowledge base's objects or goal changed
                 plan = self.replan_now("the knowledge base changed")
+            if self._found:  # the others stop looking: the mission goes on from here
+                found, self._found = self._found, ""
+                self.decide("search", found)
+                searched = self._searched
+                plan = self.replan_now(found)
+                if self._replanner is not None and self._searched == searched:
+                    # A find ends a search: not a failure (a place ruled out was
+                    # refunded when the task was made again).
+                    self._replanner.budgeted_calls = max(0, self._replanner.budgeted_calls - 1)
             first = self._next_label
             outcome, failed = self._run_plan(plan, first)
             self._next_label = max(self._records, default=first - 1) + 1
             if self.operator is not None and self.operator.pending() is not None:
                 continue  # the operator stopped this plan: take the request
-            if self._knowledge_pending():
-                continue  # stopped for a change of the knowledge base: replan
+            if self._knowledge_pending() or self._found:
+                continue  # stopped for a change of the knowledge base, or a find: replan
             if outcome == "preempted":
                 self.decide("stop", "preempted")
                 return "preempted"
@@ -400,6 +413,44 @@ class Executive(PlanContainer):
                 report.actions_failed += 1
             if record.outcome == "succeeded" and self.checkpoint is not None:
                 self.checkpoint(self.snapshot())
+            if not self._found:
+                self._found = self._search_over(record)
+                if self._found:
+                    self.stop_plan()
+
+    def _search_over(self, record: StepRecord) -> str:
+        """Why the plan in force stops after ``record``'s step, for a search: a lost
+        object was found while steps of the plan still look for it elsewhere (another
+        robot's ``search``), or a place a step was to look at was ruled out while other
+        robots' steps run (they need not finish before the robots look further); or
+        ``""``."""
+        pending = [
+            step
+            for i, step in enumerate(self._plan_in_force, start=self._first_in_force)
+            if step.action.lower() == "search"
+            and len(step.arguments) > 2
+            and not self._succeeded(i)
+        ]
+        if not pending:
+            return ""
+        facts = self.belief.facts
+        at, held = places_of(facts)
+        for step in pending:
+            item, place = step.arguments[1].lower(), step.arguments[2].lower()
+            where = sorted(at.get(item, ())) or ([f"{held[item]}'s hand"] if item in held else [])
+            if where and place not in where:
+                return f"{item} found at {where[0]}: {step.arguments[0]} stops looking at {place}"
+        others = [
+            state
+            for state in self.running_steps()
+            if state.index != record.index
+            and state.ground.step.arguments[:1] != record.step.arguments[:1]
+        ]
+        for step in pending if others else ():
+            item, place = step.arguments[1].lower(), step.arguments[2].lower()
+            if (ABSENT, item, place) in facts:
+                return f"{item} is not at {place}: the robots look further"
+        return ""
 
     # -- operator requests (MissionControl, execution/control.py) --------------------------
     def running_steps(self) -> list[StepState]:

@@ -38,7 +38,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
-from plan_bridge.belief import FactSnapshot
+from plan_bridge.belief import FactSnapshot, values_of
 from plan_bridge.execution.semantics import ActionModel
 from plan_bridge.execution.task_view import project
 from plan_bridge.fleet.jobs import Job, allocate, jobs_of
@@ -117,6 +117,9 @@ class FleetPlanner:
         if len(robots) < 2 or not jobs:
             return self._solve_one(task, facts, atoms, timeout, cancel)
         plan = _Planning(facts, closed, started + timeout, cancel, started)
+        split = self._search_split(task, jobs, robots, plan)
+        if split is not None:
+            return split
         if len(jobs) == 1:
             return self._team(self._nearest(jobs[0], robots, plan), jobs, plan)
         shares = allocate(jobs, robots, facts, self.view, closed)
@@ -186,6 +189,72 @@ class FleetPlanner:
                 for robot in team:
                     self._last.pop(robot, None)
         return dataclasses.replace(result, planning_time_s=time.monotonic() - plan.started)
+
+    # -- looking for a lost object, robots apart ---------------------------------------
+    def _search_split(
+        self,
+        task: PlanningTask,
+        jobs: Sequence[Job],
+        robots: Sequence[str],
+        plan: _Planning,
+    ) -> PlanResult | None:
+        """A goal whose one job to do needs a lost object (the others hold already):
+        its robot looks at the best place of the search order, every other robot at the
+        next best place left, at the same time (None: no lost object, one place left,
+        other jobs to do, or the job's robot has no plan alone: planned as before)."""
+        lost = sorted({f[2] for f in task.initial_facts if f[0] == "may-hold"})
+        if not lost:
+            return None
+        item = lost[0]
+        mine = [j for j in jobs if any(item in atom[1:] for atom in j.atoms)]
+        rest = [j for j in jobs if j not in mine]
+        if len(mine) != 1 or not all(a in plan.facts for j in rest for a in j.atoms):
+            return None
+        job = mine[0]
+        order = self.view.search_order(plan.facts, item, robots, plan.closed)
+        if len(order) < 2:
+            return None
+        first = job.robot or self._by_distance(order[0], robots, plan)[0]
+        looks: dict[str, str] = {first: order[0]}
+        for place in order[1:]:
+            free = [r for r in robots if r not in looks]
+            if not free:
+                break
+            looks[self._by_distance(place, free, plan)[0]] = place
+        shares: dict[str, list[Job]] = {first: [job]}
+        for robot, place in looks.items():
+            if robot != first:
+                shares[robot] = [Job((("at", item, place),), robot, place, place)]
+        for other in rest:  # what holds keeps holding (a robot's hand stays empty)
+            if other.robot in shares:
+                shares[other.robot].append(other)
+
+        def solve(robot: str) -> PlanResult:
+            atoms = tuple(atom for share in shares[robot] for atom in share.atoms)
+            part = self.view.task_for(
+                plan.facts,
+                atoms,
+                robots=[robot],
+                closed=plan.closed,
+                search_at={item: [looks[robot]]},
+            )
+            # The belief holds the places of the whole fleet's search: this robot's own.
+            own = [f for f in project(plan.facts, part) if f[0] != "may-hold"]
+            own += [f for f in part.initial_facts if f[0] == "may-hold"]
+            state = FactSnapshot(own, values_of(plan.facts))
+            state = project(state, part)
+            options: dict[str, Any] = {"timeout": max(plan.left(), 0.05), "initial_state": state}
+            if plan.cancel is not None and accepts_cancel(self.inner):
+                options["cancel"] = plan.cancel
+            return self._tidied(self.inner.solve(part, **options), part, state)
+
+        with ThreadPoolExecutor(max_workers=len(shares), thread_name_prefix="fleet") as run:
+            results = dict(zip(shares, run.map(solve, shares), strict=True))
+        if not results[first].solved:
+            return None
+        # A robot that cannot get to its place (a closed fridge it cannot open...) stays.
+        kept = {r: res for r, res in results.items() if res.solved}
+        return self._merged({r: shares[r] for r in kept}, kept, plan)
 
     # -- robots apart ----------------------------------------------------------------
     def _shares(self, shares: Mapping[str, list[Job]], plan: _Planning) -> PlanResult:

@@ -27,11 +27,12 @@ from __future__ import annotations
 import threading
 import weakref
 from collections import OrderedDict
-from collections.abc import Collection, Iterable, Sequence
+from collections.abc import Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from plan_bridge.belief import FactSnapshot, values_of
+from plan_bridge.belief.whereabouts import absences
 from plan_bridge.errors import PlanBridgeError
 from plan_bridge.maps.graph import PlaceMap
 from plan_bridge.maps.model import WorldModel
@@ -87,6 +88,9 @@ class _Needs:
     gates: dict[str, None] = field(default_factory=dict)
     searches: dict[str, list[str]] = field(default_factory=dict)
     """A lost object -> the places to look for it at (the best tier left)."""
+    searched: dict[str, None] = field(default_factory=dict)
+    """The places a lost object was looked for at: named by the task (no routes), so
+    that its ``(absent OBJECT PLACE)`` facts go wherever the task's facts go."""
 
     def place(self, name: str | None) -> None:
         if name:
@@ -163,16 +167,19 @@ class RouteTasks:
         goal: Sequence[Fact],
         robots: Iterable[str] | None = None,
         closed: frozenset[str] | None = None,
+        search_at: Mapping[str, Sequence[str]] | None = None,
     ) -> PlanningTask:
         """The task of ``goal`` (atoms of the map domain) from the belief ``facts``, for
         ``robots`` (lower-case names; all when None). ``closed``: the hallways to
         route round (by default those the belief does not hold open; a part of a task
-        is made with the task's own, :meth:`closed_for`)."""
+        is made with the task's own, :meth:`closed_for`). ``search_at``: a lost object
+        -> the places this task looks for it at (by default the first ones of
+        :meth:`search_order`, one per robot; a fleet gives each robot its own)."""
         goal = tuple(goal)
         self._learn(facts)
         if closed is None:
             closed = self._closed(facts)
-        needs = self._needs(facts, goal, robots, closed)
+        needs = self._needs(facts, goal, robots, closed, search_at or {})
         spec = self._spec(facts, goal, needs, closed)
         key = (spec.objects, _static(spec), spec.goal)
         with self._lock:
@@ -214,6 +221,7 @@ class RouteTasks:
         goal: Sequence[Fact],
         robots: Iterable[str] | None,
         closed: frozenset[str],
+        search_at: Mapping[str, Sequence[str]],
     ) -> _Needs:
         needs = _Needs()
         chosen = list(robots) if robots is not None else self.robots()
@@ -233,29 +241,45 @@ class RouteTasks:
             if item in where or item in held:
                 needs.place(where.get(item))
             else:
-                self._search_needs(facts, item, needs, where, closed)
+                if item in search_at:
+                    needs.searches[item] = list(search_at[item])
+                    for place in needs.searches[item]:
+                        needs.place(place)
+                else:
+                    self._search_needs(facts, item, needs, closed)
+                needs.searched.update(dict.fromkeys(absences(facts, item)))
         self._gates_needed(facts, closed, needs)
         return needs
 
-    def _search_needs(
+    def search_order(
         self,
         facts: FactSnapshot,
         item: str,
-        needs: _Needs,
-        where: dict[str, str],
-        closed: frozenset[str],
-    ) -> None:
-        """A lost object: the first places of the search order to look for it at, one
-        per robot (:mod:`plan_bridge.maps.search`); none left:
-        :class:`ObjectNotFoundError`."""
+        robots: Iterable[str] | None = None,
+        closed: frozenset[str] | None = None,
+    ) -> list[str]:
+        """The places (lower case) to look for lost ``item`` at, in order
+        (:func:`~plan_bridge.maps.search.search_order`, the route from the nearest of
+        ``robots``; all when None)."""
+        if closed is None:
+            closed = self._closed(facts)
+        where, _ = whereabouts(facts)
         metres: dict[str, float] = {}
-        for robot in needs.robots:
+        for robot in robots if robots is not None else self.robots():
             at = where.get(robot)
             lengths = self.graph.lengths_from(self.name(at), closed) if at else {}
             for place, length in lengths.items():
                 lower = place.lower()
                 metres[lower] = min(length, metres.get(lower, length))
-        order = search_order(self.model, facts, item, metres)
+        return search_order(self.model, facts, item, metres)
+
+    def _search_needs(
+        self, facts: FactSnapshot, item: str, needs: _Needs, closed: frozenset[str]
+    ) -> None:
+        """A lost object: the first places of the search order to look for it at, one
+        per robot (:mod:`plan_bridge.maps.search`); none left:
+        :class:`ObjectNotFoundError`."""
+        order = self.search_order(facts, item, needs.robots, closed)
         if not order:
             searched = [self.name(f[2]) for f in facts if f[0] == "absent" and f[1] == item]
             raise ObjectNotFoundError(self.name(item), searched)
@@ -343,6 +367,7 @@ class RouteTasks:
         objects: list[tuple[str, str]] = [(r, "bot") for r in needs.robots]
         objects += [(i, "item") for i in needs.items]
         objects += [(p, "spot") for p in places]
+        objects += [(p, "spot") for p in needs.searched if p not in needs.places]
         for gate in needs.gates:
             info = model.gates.get(self.name(gate))
             if info is not None:

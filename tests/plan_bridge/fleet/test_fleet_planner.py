@@ -58,3 +58,36 @@ def test_one_robot_is_planned_as_the_inner_planner_does(kairos: Any, house: Any)
     task = view.task_for(view.belief(), SWAP)
     result = FleetPlanner(kairos, view).solve(task, timeout=30)
     assert result.solved and {s.arguments[0] for s in result.actions} == {"robot"}
+
+
+def test_robots_look_for_a_lost_object_at_different_places_at_once(kairos: Any, house: Any) -> None:
+    # Nobody knows where the apple is: the robot (kitchen) and the rover (bedroom)
+    # each look at a place of their own, both from the start.
+    view = RouteTasks(house(rover=True))
+    belief = view.belief()
+    facts = FactSnapshot({f for f in belief if "apple" not in f[1:]}, belief.values)
+    task = view.task_for(facts, [("holding", "robot", "apple")])
+    result = FleetPlanner(kairos, view).solve(task, timeout=30)
+    assert result.solved
+    searches = {s.arguments[0]: s.arguments[2] for s in result.actions if s.action == "search"}
+    assert set(searches) == {"robot", "rover"}
+    assert searches["robot"] != searches["rover"]
+    firsts = {
+        r: min(s.start or 0.0 for s in result.actions if s.arguments[0] == r) for r in searches
+    }
+    assert firsts == {"robot": 0.0, "rover": 0.0}
+
+
+def test_a_lost_object_is_looked_for_only_where_it_was_not_looked_for_yet(
+    kairos: Any, house: Any
+) -> None:
+    # The apple is not on the desk (the robot looked): the task names the desk, so
+    # the fleet's parts know it, and nobody looks there again.
+    view = RouteTasks(house(rover=True))
+    belief = view.belief()
+    facts = {f for f in belief if "apple" not in f[1:]} | {("absent", "apple", "desk_top")}
+    task = view.task_for(FactSnapshot(facts, belief.values), [("holding", "robot", "apple")])
+    assert ("absent", "apple", "desk_top") in task.initial_facts
+    result = FleetPlanner(kairos, view).solve(task, timeout=30)
+    assert result.solved
+    assert {s.arguments[2] for s in result.actions if s.action == "search"} == {"shelf_top"}

@@ -11,7 +11,7 @@ import pytest
 
 pytest.importorskip("pyrobosim", reason="pyrobosim is not installed (the sim extra)")
 
-from plan_bridge.belief.whereabouts import ABSENT
+from plan_bridge.belief.whereabouts import ABSENT, places_of
 from plan_bridge.missions.mission import load_target
 from plan_bridge.missions.runner import MissionOptions, prepare_mission
 from plan_bridge.robosim.events import EventError, check_events, parse_events
@@ -84,3 +84,44 @@ def test_events_take_objects_away_add_new_ones_and_draw_a_place() -> None:
 def test_bad_events_are_refused_with_the_reason(item: dict[str, Any], message: str) -> None:
     with pytest.raises(EventError, match=message):
         check_events(parse_events([item]), ["table"], ["soda"], ["table_top"])
+
+
+def watched(world: str, events: str, seed: int) -> tuple[Any, dict[str, set[str]], list[float]]:
+    """A run of find_and_fetch on ``world`` (a file of robosim_search): the mission,
+    where each robot looked for the soda and did not find it, when it was found."""
+    goal = "(and (At soda foyer_table_tabletop) (HandEmpty robot))"
+    target = load_target(SEARCH / world, goal=goal, events=SEARCH / "events" / f"{events}.yaml")
+    mission = prepare_mission(target, MissionOptions(seed=seed, fail_rate=0.0))
+    belief, sim = mission.executive.belief, mission.world
+    assert isinstance(sim, RobosimWorld)
+    looked: dict[str, set[str]] = {}
+    found: list[float] = []
+
+    def watch() -> None:
+        facts = belief.facts
+        at, held = places_of(facts)
+        for fact in facts:
+            if fact[0] == ABSENT and fact[1] == "soda":
+                for robot in ("robot", "robot2"):
+                    if fact[2] in at.get(robot, ()):
+                        looked.setdefault(robot, set()).add(fact[2])
+        if looked and not found and ("soda" in at or "soda" in held):
+            found.append(sim.now())
+
+    belief.add_listener(watch)
+    mission.run()
+    sim.close()
+    return mission, looked, found
+
+
+def test_two_robots_look_at_different_places_and_find_it_sooner_than_one() -> None:
+    # Seed 9 moves the soda to the living room's shelf: the robot alone looks in the
+    # kitchen and the office first; with two, the second looks in the living room.
+    one, _, one_found = watched("world.yaml", "moved", 9)
+    two, looked, two_found = watched("world_two_robots.yaml", "moved", 9)
+    assert one.executive.report.goal_reached and two.executive.report.goal_reached
+    assert set(looked) == {"robot", "robot2"}
+    assert not looked["robot"] & looked["robot2"]
+    assert two_found[0] < one_found[0]
+    searches = [d["reason"] for d in two.executive.report.decisions if d["decision"] == "search"]
+    assert any(reason.startswith("soda found at shelf_board") for reason in searches)
