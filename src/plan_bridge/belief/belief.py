@@ -84,8 +84,10 @@ class Belief:
             self._listeners = [*self._listeners, listener]
 
     def remove_listener(self, listener: Callable[[], None]) -> None:
+        """Stop calling ``listener``. Compared by equality: ``obj.method`` makes a new
+        bound method at every access, equal to (not the same as) the one added."""
         with self._lock:
-            self._listeners = [cb for cb in self._listeners if cb is not listener]
+            self._listeners = [cb for cb in self._listeners if cb != listener]
 
     def _changed(self) -> None:
         for listener in self._listeners:  # a copy-on-write list: no lock needed

@@ -71,7 +71,7 @@ class OrderBook:
 
     def remove_listener(self, listener: Listener) -> None:
         with self._lock:
-            self._listeners = [x for x in self._listeners if x is not listener]
+            self._listeners = [x for x in self._listeners if x != listener]  # bound methods
 
     def add_waker(self, wake: Callable[[], None]) -> None:
         """Call ``wake()`` when something arrives or is cancelled from outside the

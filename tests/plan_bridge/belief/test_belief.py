@@ -32,3 +32,18 @@ def test_observations_accept_mappings_pairs_and_text() -> None:
 def test_malformed_observations_are_rejected_with_the_expected_shape(bad: object) -> None:
     with pytest.raises((ValueError, TypeError)):
         normalise_observations(bad)
+
+
+def test_a_listener_added_as_a_bound_method_is_removed_by_the_same_expression() -> None:
+    class Watcher:
+        calls = 0
+
+        def poke(self) -> None:
+            self.calls += 1
+
+    belief, watcher = Belief(), Watcher()
+    belief.add_listener(watcher.poke)
+    belief.apply([("a",)], [])
+    belief.remove_listener(watcher.poke)  # a new bound method object, equal to the first
+    belief.apply([("b",)], [])
+    assert watcher.calls == 1

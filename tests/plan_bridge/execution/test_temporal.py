@@ -97,6 +97,15 @@ def test_a_time_triggered_plan_compiles_to_one_dispatcher_whose_steps_overlap(
     assert kinds.count(ActionStarted) == 3 and kinds.count(ActionEnded) == 3
 
 
+def test_a_finished_plan_leaves_no_listener_on_the_belief_so_old_plans_can_be_freed(
+    task: PlanningTask,
+) -> None:
+    # A mission of orders runs hundreds of plans against one belief: a listener left
+    # behind would keep every old plan machine alive.
+    outcome, _, belief, _ = run(task, skills_with(hold_light=0.02), PLAN)
+    assert outcome == "succeeded" and belief._listeners == []
+
+
 def test_a_step_waits_for_the_end_of_a_causal_predecessor_and_the_start_of_an_overlapping_one(
     task: PlanningTask,
 ) -> None:

@@ -160,3 +160,20 @@ def test_live_orders_from_many_threads_each_arrive_once() -> None:
         thread.join(timeout=10)
     assert sorted(taken) == sorted(f"t{n}-{i}" for n in range(4) for i in range(50))
     assert all(isinstance(s, OrderState) for s in book.states())
+
+
+def test_a_listener_added_as_a_bound_method_is_removed_by_the_same_expression() -> None:
+    class Panel:
+        def __init__(self) -> None:
+            self.seen: list[str] = []
+
+        def changed(self, state: OrderState) -> None:
+            self.seen.append(state.status.value)
+
+    book, panel = book_of(Order("a", "g", 0.0)), Panel()
+    book.add_listener(panel.changed)
+    book.arrivals(1.0)
+    book.accept("a", ATOMS, 1.0)
+    book.remove_listener(panel.changed)  # a new bound method object, equal to the first
+    book.assign("a", ["ann"], 2.0)
+    assert panel.seen == ["queued"]
