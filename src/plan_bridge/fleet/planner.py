@@ -200,8 +200,9 @@ class FleetPlanner:
     ) -> PlanResult | None:
         """A goal whose one job to do needs a lost object (the others hold already):
         its robot looks at the best place of the search order, every other robot at the
-        next best place left, at the same time (None: no lost object, one place left,
-        other jobs to do, or the job's robot has no plan alone: planned as before)."""
+        next best place left, at the same time; the last place left goes to the robot
+        nearest to it (None: no lost object, other jobs to do, or the job's robot has
+        no plan alone: planned as before)."""
         lost = sorted({f[2] for f in task.initial_facts if f[0] == "may-hold"})
         if not lost:
             return None
@@ -212,7 +213,7 @@ class FleetPlanner:
             return None
         job = mine[0]
         order = self.view.search_order(plan.facts, item, robots, plan.closed)
-        if len(order) < 2:
+        if not order:
             return None
         first = job.robot or self._by_distance(order[0], robots, plan)[0]
         looks: dict[str, str] = {first: order[0]}
