@@ -527,12 +527,14 @@ class Executive(PlanContainer):
         if self.is_running():
             raise RuntimeError(f"executive {self.path}: attach a knowledge base before the run")
         self.detach_knowledge()
+        view = self.task_view
         self._link = KnowledgeLink(
             knowledge,
             self.belief,
             self.task,
             self._knowledge_changed,
-            whole_world=self.task_view is not None,
+            whole_world=view is not None,
+            objects_of=view.objects if view is not None else None,
         )
         self.knowledge = knowledge
 

@@ -39,8 +39,9 @@ class TaskView(Protocol):
         values); the first task's map atoms are added to it."""
         ...
 
-    def objects(self) -> Mapping[str, str]:
-        """Every object of the world and its type (lower case)."""
+    def objects(self, facts: Collection[Fact] | None = None) -> Mapping[str, str]:
+        """Every object of the world and its type (lower case); with ``facts`` (a
+        belief), objects they have that the world did not know (seen on the way) too."""
         ...
 
     def task_for(self, facts: FactSnapshot, goal: Sequence[Fact]) -> PlanningTask:

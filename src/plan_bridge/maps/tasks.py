@@ -150,9 +150,12 @@ class RouteTasks:
                 facts.add(_f("IsLocked", gate.name))
         return FactSnapshot(facts, values)
 
-    def objects(self) -> dict[str, str]:
+    def objects(self, facts: Collection[Fact] | None = None) -> dict[str, str]:
         """Every object of the world and its type (lower case): robots, objects,
-        places, hallways and locations."""
+        places, hallways and locations; with ``facts`` (a belief), the objects it has
+        at a place that the map did not know join first (seen on the way)."""
+        if facts is not None:
+            self._learn(facts)
         model = self.model
         named: dict[str, str] = {r.name.lower(): "bot" for r in model.robots}
         named.update((item.lower(), "item") for item in model.items)

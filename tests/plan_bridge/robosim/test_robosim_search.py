@@ -125,3 +125,23 @@ def test_two_robots_look_at_different_places_and_find_it_sooner_than_one() -> No
     assert two_found[0] < one_found[0]
     searches = [d["reason"] for d in two.executive.report.decisions if d["decision"] == "search"]
     assert any(reason.startswith("soda found at shelf_board") for reason in searches)
+
+
+def test_an_object_never_heard_of_seen_on_the_way_joins_the_knowledge_base() -> None:
+    target = load_target(
+        SEARCH,
+        goal="(At robot office_desk_desktop)",
+        events=SEARCH / "events" / "new_cup.yaml",
+    )
+    mission = prepare_mission(target, MissionOptions(seed=0, fail_rate=0.0))
+    knowledge = mission.attach_knowledge()
+    assert "cup0" not in knowledge.objects
+    assert mission.run() == "succeeded"
+    assert knowledge.objects["cup0"] == "item"
+    # Seeing it was no reason to replan; a goal may name it now.
+    assert not any("cup0" in d["reason"] for d in mission.executive.report.decisions)
+    knowledge.set_goal("(Holding robot cup0)")
+    assert mission.run() == "succeeded"
+    assert mission.executive.report.executed[-1].startswith("(pick robot cup0")
+    assert isinstance(mission.world, RobosimWorld)
+    mission.world.close()
