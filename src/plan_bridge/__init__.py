@@ -36,7 +36,8 @@ if TYPE_CHECKING:
     from plan_bridge.execution.compile import compile_plan
     from plan_bridge.execution.executive import Executive, ReplanPolicy
     from plan_bridge.execution.simulation import SimulatedWorld
-    from plan_bridge.missions.mission import MissionSetup, Target, load_target
+    from plan_bridge.missions.mission import load_target
+    from plan_bridge.missions.target import MissionSetup, Target
     from plan_bridge.pddl.task import (
         ActionSchema,
         Fact,
@@ -77,8 +78,8 @@ _LAZY = {
     "Executive": "plan_bridge.execution.executive",
     "ReplanPolicy": "plan_bridge.execution.executive",
     "SimulatedWorld": "plan_bridge.execution.simulation",
-    "MissionSetup": "plan_bridge.missions.mission",
-    "Target": "plan_bridge.missions.mission",
+    "MissionSetup": "plan_bridge.missions.target",
+    "Target": "plan_bridge.missions.target",
     "load_target": "plan_bridge.missions.mission",
 }
 

@@ -31,8 +31,8 @@ from plan_bridge.cli.progress import summary_text as _summary
 from plan_bridge.missions.runner import DEFAULT_FAIL_RATE
 
 if TYPE_CHECKING:
-    from plan_bridge.missions.mission import MissionSetup, Target
     from plan_bridge.missions.runner import Mission, MissionOptions
+    from plan_bridge.missions.target import MissionSetup, Target
     from plan_bridge.planning.types import Planner
 
 __all__ = ["ProgressPrinter"]
@@ -456,8 +456,8 @@ class _Start:
 
 
 def _start_mission(args: argparse.Namespace, target: Target, resources: Any) -> _Start:
-    from plan_bridge.missions.mission import MissionSetup
     from plan_bridge.missions.runner import MissionOptions
+    from plan_bridge.missions.target import MissionSetup
 
     default_scale = VIEWER_TIME_SCALE if args.viewer is not None else 0.0
     options = MissionOptions(

@@ -30,7 +30,7 @@ if TYPE_CHECKING:  # (imported lazily: the CLI reads DEFAULT_FAIL_RATE at start-
     from plan_bridge.execution.executive import Executive
     from plan_bridge.execution.temporal import TimelineRecorder
     from plan_bridge.execution.world import World
-    from plan_bridge.missions.mission import MissionSetup, Target
+    from plan_bridge.missions.target import MissionSetup, Target
     from plan_bridge.pddl.knowledge import KnowledgeBase
     from plan_bridge.planning.types import Planner
     from smach.introspection.journal import Journal

@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any
 
 from plan_bridge.errors import PlanBridgeError
 from plan_bridge.fleet.planner import FleetPlanner
-from plan_bridge.missions.mission import MissionSetup, Target, TargetError, load_domain_module
+from plan_bridge.missions.target import MissionSetup, Target, TargetError, load_domain_module
 from plan_bridge.pddl.constructs import did_you_mean
 from plan_bridge.pddl.task import Fact, PlanningTask
 from plan_bridge.robosim.events import WorldEvent, check_events, load_events
