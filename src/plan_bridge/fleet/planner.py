@@ -199,10 +199,11 @@ class FleetPlanner:
         plan: _Planning,
     ) -> PlanResult | None:
         """A goal whose one job to do needs a lost object (the others hold already):
-        its robot looks at the best place of the search order, every other robot at the
-        next best place left, at the same time; the last place left goes to the robot
-        nearest to it (None: no lost object, other jobs to do, or the job's robot has
-        no plan alone: planned as before)."""
+        every robot looks at a place of its own at the same time
+        (:meth:`RouteTasks.search_shares`: by fit per metre of its own route, a robot
+        on its way keeping its place); the job goes to its robot, or to the robot of
+        the best place (None: no lost object, other jobs to do, or the job's robot has
+        no place or no plan alone: planned as before)."""
         lost = sorted({f[2] for f in task.initial_facts if f[0] == "may-hold"})
         if not lost:
             return None
@@ -212,16 +213,12 @@ class FleetPlanner:
         if len(mine) != 1 or not all(a in plan.facts for j in rest for a in j.atoms):
             return None
         job = mine[0]
-        order = self.view.search_order(plan.facts, item, robots, plan.closed)
-        if not order:
+        looks = self.view.search_shares(plan.facts, item, robots, plan.closed, remember=True)
+        if not looks or any(place not in task.objects for place in looks.values()):
+            return None  # (the task ranked the places from another belief)
+        first = job.robot or next(iter(looks))
+        if first not in looks:
             return None
-        first = job.robot or self._by_distance(order[0], robots, plan)[0]
-        looks: dict[str, str] = {first: order[0]}
-        for place in order[1:]:
-            free = [r for r in robots if r not in looks]
-            if not free:
-                break
-            looks[self._by_distance(place, free, plan)[0]] = place
         shares: dict[str, list[Job]] = {first: [job]}
         for robot, place in looks.items():
             if robot != first:

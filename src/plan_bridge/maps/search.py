@@ -50,6 +50,7 @@ __all__ = [
     "TIER_WEIGHT",
     "ObjectNotFoundError",
     "fit",
+    "place_weights",
     "search_order",
     "search_places",
     "search_tiers",
@@ -207,9 +208,16 @@ def search_order(
     """The places (lower case) to look for lost ``item`` at, in order (see the module's
     doc); ``metres``: the route from the nearest robot to each place (lower case; a
     place missing from it cannot be reached and is left out)."""
-    ranked: list[tuple[float, str]] = []
-    for tier, places in _tiered(model, facts, item).items():
-        for place in places:
-            if place in metres:
-                ranked.append((-TIER_WEIGHT.get(tier, 1.0) / (metres[place] + NEAR_M), place))
+    weights = place_weights(model, facts, item)
+    ranked = [(-weight / (metres[p] + NEAR_M), p) for p, weight in weights.items() if p in metres]
     return [place for _, place in sorted(ranked)]
+
+
+def place_weights(model: WorldModel, facts: Collection[Fact], item: str) -> dict[str, float]:
+    """The places (lower case) where lost ``item`` may be, not searched yet, and their
+    weights in the search order (:data:`TIER_WEIGHT` of their tier of fit)."""
+    return {
+        place: TIER_WEIGHT.get(tier, 1.0)
+        for tier, places in _tiered(model, facts, item).items()
+        for place in places
+    }

@@ -36,7 +36,7 @@ from plan_bridge.belief.whereabouts import absences
 from plan_bridge.errors import PlanBridgeError
 from plan_bridge.maps.graph import PlaceMap
 from plan_bridge.maps.model import WorldModel
-from plan_bridge.maps.search import ObjectNotFoundError, search_order
+from plan_bridge.maps.search import NEAR_M, ObjectNotFoundError, place_weights, search_order
 from plan_bridge.pddl.spec import ProblemSpec
 from plan_bridge.pddl.task import Fact, PlanningTask, task_from_spec
 
@@ -115,6 +115,8 @@ class RouteTasks:
             weakref.WeakKeyDictionary()
         )
         self._lock = threading.Lock()
+        # A lost object -> robot -> the place it was sent to look at (search_shares).
+        self._looking: dict[str, dict[str, str]] = {}
 
     def name(self, pddl: str) -> str:
         """The world's name of a lower-case PDDL name."""
@@ -243,6 +245,8 @@ class RouteTasks:
         for item in list(needs.items):
             if item in where or item in held:
                 needs.place(where.get(item))
+                with self._lock:
+                    self._looking.pop(item, None)  # found: the robots' places are free
             else:
                 if item in search_at:
                     needs.searches[item] = list(search_at[item])
@@ -276,17 +280,60 @@ class RouteTasks:
                 metres[lower] = min(length, metres.get(lower, length))
         return search_order(self.model, facts, item, metres)
 
+    def search_shares(
+        self,
+        facts: FactSnapshot,
+        item: str,
+        robots: Sequence[str],
+        closed: frozenset[str] | None = None,
+        *,
+        remember: bool = False,
+    ) -> dict[str, str]:
+        """Robot -> the place it looks for lost ``item`` at, a place of its own each,
+        best first: a robot still on its way to the place it was given last (by a call
+        with ``remember``) keeps it; then, of every robot and place left, the pair of the
+        best fit per metre of the robot's own route (the search order's rank) is taken,
+        again and again. One robot: the first place of :meth:`search_order`."""
+        if closed is None:
+            closed = self._closed(facts)
+        weights = place_weights(self.model, facts, item)
+        where, _ = whereabouts(facts)
+        metres: dict[str, dict[str, float]] = {}
+        for robot in robots:
+            at = where.get(robot)
+            lengths = self.graph.lengths_from(self.name(at), closed) if at else {}
+            metres[robot] = {p.lower(): n for p, n in lengths.items() if p.lower() in weights}
+        with self._lock:
+            before = dict(self._looking.get(item, {}))
+        shares = {r: p for r, p in before.items() if r in metres and p in metres[r]}
+        pairs = sorted(
+            (-weights[place] / (length + NEAR_M), robot, place)
+            for robot, lengths in metres.items()
+            for place, length in lengths.items()
+        )
+        for _, robot, place in pairs:
+            if robot not in shares and place not in shares.values():
+                shares[robot] = place
+        if remember:
+            with self._lock:
+                self._looking[item] = dict(shares)
+        return shares
+
     def _search_needs(
         self, facts: FactSnapshot, item: str, needs: _Needs, closed: frozenset[str]
     ) -> None:
-        """A lost object: the first places of the search order to look for it at, one
-        per robot (:mod:`plan_bridge.maps.search`); none left:
+        """A lost object: the places to look for it at, one per robot
+        (:meth:`search_shares`, :mod:`plan_bridge.maps.search`); none left:
         :class:`ObjectNotFoundError`."""
         order = self.search_order(facts, item, needs.robots, closed)
         if not order:
             searched = [self.name(f[2]) for f in facts if f[0] == "absent" and f[1] == item]
             raise ObjectNotFoundError(self.name(item), searched)
-        needs.searches[item] = order[: max(1, len(needs.robots))]
+        if len(needs.robots) > 1:
+            shares = self.search_shares(facts, item, needs.robots, closed)
+            needs.searches[item] = list(dict.fromkeys(shares.values())) or order[:1]
+        else:
+            needs.searches[item] = order[:1]
         for place in needs.searches[item]:
             needs.place(place)
 

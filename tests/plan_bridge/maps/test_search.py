@@ -147,3 +147,27 @@ def test_search_tiers_fit_any_world_model(house: Any) -> None:
     # A model whose locations have no category: every place is one tier.
     facts = FactSnapshot({("at", "robot", "kitchen"), (ABSENT, "apple", "desk_top")})
     assert search_tiers(house(), facts, "apple") == [["shelf_top"]]
+
+
+def test_each_robot_gets_a_place_of_its_own_and_keeps_it_on_its_way(house: Any) -> None:
+    view = RouteTasks(house(rover=True))
+    start = view.belief()
+    lost = {f for f in start if "apple" not in f[1:]}
+    facts = FactSnapshot(lost, start.values)
+    robots = ["robot", "rover"]
+    # The nearest place by each robot's own route: the robot (kitchen) the desk, the
+    # rover (bedroom) the shelf.
+    given = view.search_shares(facts, "apple", robots, remember=True)
+    assert given == {"robot": "desk_top", "rover": "shelf_top"}
+    # Both are believed at the other's room now: each keeps the place it was given.
+    swapped = (lost - {("at", "robot", "kitchen"), ("at", "rover", "bedroom")}) | {
+        ("at", "robot", "bedroom"),
+        ("at", "rover", "kitchen"),
+    }
+    moved = FactSnapshot(swapped, start.values)
+    assert view.search_shares(moved, "apple", robots) == given
+    fresh = RouteTasks(house(rover=True))
+    assert fresh.search_shares(moved, "apple", robots) == {
+        "robot": "shelf_top",
+        "rover": "desk_top",
+    }
