@@ -124,7 +124,10 @@ class RouteTasks:
 
     # -- the belief at the start -------------------------------------------------
     def belief(self) -> FactSnapshot:
-        """Every robot, object and gate of the world as it is loaded."""
+        """Every robot, object and gate of the world as it is loaded (a new mission: the
+        places robots were sent to look at, :meth:`search_shares`, are forgotten)."""
+        with self._lock:
+            self._looking.clear()
         model = self.model
         facts: set[Fact] = set()
         values: dict[Fact, float] = {}
