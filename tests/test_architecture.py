@@ -83,28 +83,10 @@ def test_a_module_over_600_lines_says_why_at_its_top() -> None:
 
 
 # -- import circles between files --------------------------------------------------------------
-#: Import circles between files that exist today in code another change is reworking
-#: (issue 38: plan_bridge.execution, .missions, .robosim); each is one circle, its
-#: files sorted. The list only shrinks: a circle that is gone must leave it
-#: (test_every_listed_circle_still_exists), and no other may appear.
-KNOWN_FILE_CYCLES_TO_REMOVE = {
-    # The pyrobosim world adopts steps and draws itself; both need the world.
-    ("plan_bridge.robosim.adopt", "plan_bridge.robosim.picture", "plan_bridge.robosim.world"),
-}
-
-
-def _file_cycles() -> set[tuple[str, ...]]:
-    return {tuple(cycle) for cycle in pg.file_cycles()}
-
-
-def test_no_two_files_import_each_other_but_the_listed_circles_being_removed() -> None:
-    # Every import counts: under TYPE_CHECKING and inside functions too.
-    assert sorted(_file_cycles() - KNOWN_FILE_CYCLES_TO_REMOVE) == []
-
-
-def test_every_listed_circle_still_exists() -> None:
-    gone = sorted(KNOWN_FILE_CYCLES_TO_REMOVE - _file_cycles())
-    assert gone == [], f"remove these from KNOWN_FILE_CYCLES_TO_REMOVE: {gone}"
+def test_no_two_files_import_each_other() -> None:
+    # Every import counts: under TYPE_CHECKING and inside functions too. Two files that
+    # need each other share a third file, or one receives what it needs (a protocol).
+    assert pg.file_cycles() == []
 
 
 def _package(tmp_path: Path, files: dict[str, str]) -> Path:

@@ -1,20 +1,70 @@
 """What a :class:`~.world.RobosimWorld` does outside its own skills: take what a user's
 skill did into the pyrobosim world (:func:`adopt_step`), and save and restore the
-world for checkpoints (:func:`snapshot_world`, :func:`restore_world`)."""
+world for checkpoints (:func:`snapshot_world`, :func:`restore_world`).
+
+The world calls these with itself, an :class:`AdoptingWorld` (what they read and
+write of it), and hands over its private parts (its actions' seeded options, its
+pending events) as arguments.
+"""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Protocol
 
 from plan_bridge.belief import Observation
+from plan_bridge.execution.clock import SimClock
 from plan_bridge.execution.snapshots import SnapshotError
-from plan_bridge.robosim.world import RobosimWorld
+from plan_bridge.maps.graph import PlaceMap
+from plan_bridge.maps.model import WorldModel
+from plan_bridge.robosim.events import WorldEvent, parse_events
 
 if TYPE_CHECKING:
     from plan_bridge.planning.types import PlanStep
 
-__all__ = ["adopt_step", "restore_world", "snapshot_world"]
+__all__ = ["AdoptingWorld", "adopt_step", "restore_world", "snapshot_world"]
+
+
+class AdoptingWorld(Protocol):
+    """What adopting a step and a checkpoint read and write of a
+    :class:`~plan_bridge.robosim.world.RobosimWorld` (see its attributes)."""
+
+    actions_run: int
+    faults: int
+    distance_m: float
+    trails: dict[str, list[list[list[float]]]]
+    searched: set[str]
+    crossed: dict[str, list[str]]
+    changes: list[str]
+
+    @property
+    def path(self) -> Path: ...
+    @property
+    def sim(self) -> Any: ...
+    @property
+    def model(self) -> WorldModel: ...
+    @property
+    def map(self) -> PlaceMap: ...
+    @property
+    def clock(self) -> SimClock: ...
+    @property
+    def robots(self) -> dict[str, Any]: ...
+    @property
+    def battery_start(self) -> dict[str, float]: ...
+    @property
+    def charged(self) -> dict[str, float]: ...
+    @property
+    def seen_open(self) -> dict[str, bool]: ...
+    def now(self) -> float: ...
+    def name(self, pddl: str) -> str: ...
+    def robot(self, name: str) -> Any: ...
+    def spot_of(self, robot: Any) -> str: ...
+    def spawn_names(self) -> list[str]: ...
+    def record_drive(self, robot: Any, points: Iterable[Any]) -> None: ...
+    def recharge(self, robot: Any) -> None: ...
+    def learn_object(self, name: str, spawn: str | None, category: str) -> None: ...
+    def quietly(self) -> Any: ...
 
 
 def _pose(x: float, y: float, yaw: float = 0.0) -> Any:
@@ -23,7 +73,7 @@ def _pose(x: float, y: float, yaw: float = 0.0) -> Any:
     return Pose(x=x, y=y, yaw=yaw)
 
 
-def _put_robot(world: RobosimWorld, robot: Any, place_name: str) -> None:
+def _put_robot(world: AdoptingWorld, robot: Any, place_name: str) -> None:
     """Stand ``robot`` at a place (what a user's drive did): the navigation pose of the
     spawn or room it is named after, else its point."""
     import copy
@@ -38,7 +88,7 @@ def _put_robot(world: RobosimWorld, robot: Any, place_name: str) -> None:
         held.set_pose(robot.get_pose())
 
 
-def _put_object(world: RobosimWorld, name: str, spawn_name: str) -> None:
+def _put_object(world: AdoptingWorld, name: str, spawn_name: str) -> None:
     obj = world.sim.get_object_by_name(name)
     for robot in world.sim.robots:
         if robot.manipulated_object is obj:
@@ -46,7 +96,7 @@ def _put_object(world: RobosimWorld, name: str, spawn_name: str) -> None:
     world.sim.update_object(obj, loc=spawn_name)
 
 
-def _set_gate(world: RobosimWorld, name: str, is_open: bool | None, locked: bool | None) -> None:
+def _set_gate(world: AdoptingWorld, name: str, is_open: bool | None, locked: bool | None) -> None:
     entity = world.sim.get_entity_by_name(name)
     if locked is False or (is_open is not None and locked is None and entity.is_locked):
         entity.is_locked = False
@@ -59,7 +109,7 @@ def _set_gate(world: RobosimWorld, name: str, is_open: bool | None, locked: bool
         entity.is_locked = True
 
 
-def adopt_step(world: RobosimWorld, step: PlanStep, observations: Sequence[Observation]) -> None:
+def adopt_step(world: AdoptingWorld, step: PlanStep, observations: Sequence[Observation]) -> None:
     """Make the pyrobosim world agree with a step a user's skill did, then with its
     observations (robot and object places, holding, open/locked, battery)."""
     args = [world.name(a) for a in step.arguments]
@@ -95,7 +145,7 @@ def adopt_step(world: RobosimWorld, step: PlanStep, observations: Sequence[Obser
     world.sim.mark_changed()
 
 
-def _adopt_observation(world: RobosimWorld, fact: tuple[str, ...], value: bool | float) -> None:
+def _adopt_observation(world: AdoptingWorld, fact: tuple[str, ...], value: bool | float) -> None:
     name, *raw = fact
     args = [world.name(a) for a in raw]
     if name == "battery-level" and not isinstance(value, bool):
@@ -119,8 +169,11 @@ def _adopt_observation(world: RobosimWorld, fact: tuple[str, ...], value: bool |
         (world.searched.add if value else world.searched.discard)(args[0])
 
 
-def snapshot_world(world: RobosimWorld) -> dict[str, Any]:
-    """The world's state as JSON data: robots, objects, gates, clock, faults, events."""
+def snapshot_world(
+    world: AdoptingWorld, options: Mapping[tuple[str, str], Any], pending: Sequence[WorldEvent]
+) -> dict[str, Any]:
+    """The world's state as JSON data: robots, objects, gates, clock, faults, events
+    (``pending``), and the random state of its actions' seeded ``options``."""
     robots = []
     for robot in world.sim.robots:
         pose = robot.get_pose()
@@ -149,9 +202,9 @@ def snapshot_world(world: RobosimWorld) -> dict[str, Any]:
         for name in world.model.gates
         for entity in [world.sim.get_entity_by_name(name)]
     }
-    options = {
+    rng = {
         f"{robot}/{action}": option.rng.bit_generator.state
-        for (robot, action), option in world._options.items()
+        for (robot, action), option in options.items()
     }
     return {
         "kind": "robosim",
@@ -169,15 +222,15 @@ def snapshot_world(world: RobosimWorld) -> dict[str, Any]:
         "seen_open": dict(world.seen_open),
         "crossed": {name: list(halls) for name, halls in world.crossed.items()},
         "changes": list(world.changes),
-        "pending": [event.to_json() | {"origin": event.origin} for event in world._pending],
+        "pending": [event.to_json() | {"origin": event.origin} for event in pending],
         "robots": robots,
         "objects": objects,
         "gates": gates,
-        "rng": options,
+        "rng": rng,
     }
 
 
-def _objects_as_in(world: RobosimWorld, entries: list[dict[str, Any]]) -> None:
+def _objects_as_in(world: AdoptingWorld, entries: list[dict[str, Any]]) -> None:
     """The objects of a snapshot, and only those: events took some away and added others
     (an object added is put on its spawn, or any, if a robot held it)."""
     wanted = {entry["name"] for entry in entries}
@@ -198,10 +251,11 @@ def _objects_as_in(world: RobosimWorld, entries: list[dict[str, Any]]) -> None:
             world.learn_object(entry["name"], entry["parent"], entry.get("category") or "")
 
 
-def restore_world(world: RobosimWorld, data: dict[str, Any]) -> None:
-    """Put a :func:`snapshot_world` back (the same world file)."""
-    from plan_bridge.robosim.events import parse_events
-
+def restore_world(
+    world: AdoptingWorld, data: dict[str, Any], options: Mapping[tuple[str, str], Any]
+) -> list[WorldEvent]:
+    """Put a :func:`snapshot_world` back (the same world file; the random state into
+    ``options``); the world's pending events."""
     if data.get("kind") != "robosim":
         raise SnapshotError("not a snapshot of a pyrobosim world (a checkpoint of another world)")
     for name, (is_open, locked) in data["gates"].items():
@@ -225,7 +279,7 @@ def restore_world(world: RobosimWorld, data: dict[str, Any]) -> None:
         robot._attach_object(world.sim.get_object_by_name(name))
     for key, state in data["rng"].items():
         robot_name, action = key.split("/", 1)
-        world._options[(robot_name, action)].rng.bit_generator.state = state
+        options[(robot_name, action)].rng.bit_generator.state = state
     world.clock.reset(float(data["time"]))
     world.actions_run = int(data["actions_run"])
     world.faults = int(data["faults"])
@@ -244,8 +298,7 @@ def restore_world(world: RobosimWorld, data: dict[str, Any]) -> None:
         r.name: list(data.get("crossed", {}).get(r.name, [])) for r in world.sim.robots
     }
     world.changes = list(data["changes"])
-    pending = data["pending"]
-    world._pending = parse_events(
-        [{k: v for k, v in e.items() if k != "origin"} for e in pending], "checkpoint"
-    )
     world.sim.mark_changed()
+    return parse_events(
+        [{k: v for k, v in e.items() if k != "origin"} for e in data["pending"]], "checkpoint"
+    )

@@ -24,14 +24,13 @@ import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 from xml.sax.saxutils import escape, quoteattr
-
-if TYPE_CHECKING:
-    from plan_bridge.robosim.world import RobosimWorld
 
 __all__ = [
     "FORMATS",
+    "TRAIL_CHUNK",
+    "PicturedWorld",
     "picture_problem",
     "picture_title",
     "scene_of",
@@ -46,6 +45,29 @@ _SCALE = 80.0  # SVG pixels per metre
 _MARGIN = 0.5  # metres around the map
 _TITLE_PX = 44.0
 Point = tuple[float, float]
+#: Poses of a trail drawn on one line of a picture (and dropped together from a world's
+#: trails: :data:`~.world.TRAIL_POINTS`).
+TRAIL_CHUNK = 40
+
+
+class PicturedWorld(Protocol):
+    """What a picture shows of a world
+    (:class:`~plan_bridge.robosim.world.RobosimWorld`)."""
+
+    @property
+    def sim(self) -> Any:
+        """The pyrobosim world."""
+
+    @property
+    def trails(self) -> dict[str, list[list[list[float]]]]:
+        """Each robot's executed drives, polylines of ``[x, y]`` points."""
+
+    @property
+    def distance_m(self) -> float:
+        """Metres the robots drove."""
+
+    def now(self) -> float:
+        """Simulated seconds."""
 
 
 @dataclass(frozen=True)
@@ -142,7 +164,7 @@ def _outlines(geometry: Any) -> list[tuple[Point, ...]]:
     ]
 
 
-def scene_of(world: RobosimWorld) -> Scene:
+def scene_of(world: PicturedWorld) -> Scene:
     """The scene of a world as it is now, with its robots' trails."""
     sim = world.sim
     scene = Scene()
@@ -210,10 +232,8 @@ def _num(value: float) -> str:
 
 
 def _trail_data(trail: Sequence[Sequence[Point]]) -> str:
-    """A trail's path data, :data:`~.world.TRAIL_CHUNK` poses a line: a drive adds to the
+    """A trail's path data, :data:`TRAIL_CHUNK` poses a line: a drive adds to the
     last line, so successive pictures differ in a few lines."""
-    from plan_bridge.robosim.world import TRAIL_CHUNK
-
     lines = []
     for part in trail:
         if len(part) < 2:
@@ -422,7 +442,7 @@ def _png(scene: Scene, title: str, path: Path) -> None:
     figure.savefig(path, format="png")
 
 
-def scene_picture(world: RobosimWorld) -> tuple[str, str]:
+def scene_picture(world: PicturedWorld) -> tuple[str, str]:
     """The viewer's picture of ``world`` as it is now (the SVG of a ``scene`` event,
     :class:`~smach.introspection.events.SceneChanged`): the map, trails so far and the
     robots' current poses, without a title line; and its caption (simulated time,
@@ -432,7 +452,7 @@ def scene_picture(world: RobosimWorld) -> tuple[str, str]:
     return svg, caption
 
 
-def write_picture(world: RobosimWorld, path: str | Path, title: str) -> Path:
+def write_picture(world: PicturedWorld, path: str | Path, title: str) -> Path:
     """Write the picture of ``world`` to ``path`` (.svg or .png); its absolute path."""
     problem = picture_problem(path)
     if problem is not None:

@@ -41,14 +41,16 @@ from plan_bridge.execution.clock import SimClock
 from plan_bridge.maps.graph import PlaceMap
 from plan_bridge.maps.model import WorldModel
 from plan_bridge.pddl.task import Fact, format_fact, parse_fact
+from plan_bridge.robosim.adopt import adopt_step, restore_world, snapshot_world
 from plan_bridge.robosim.description import describe_world, robot_place
 from plan_bridge.robosim.events import WorldEvent, check_events
 from plan_bridge.robosim.loading import load_world_file, quiet_stdout
+from plan_bridge.robosim.picture import TRAIL_CHUNK, scene_picture
 
 if TYPE_CHECKING:
     from plan_bridge.planning.types import PlanStep
 
-__all__ = ["ACTION_SECONDS", "TRAIL_CHUNK", "TRAIL_POINTS", "ActionResult", "RobosimWorld"]
+__all__ = ["ACTION_SECONDS", "TRAIL_POINTS", "ActionResult", "RobosimWorld"]
 
 #: Simulated seconds of the actions that are not drives (as in the domain).
 ACTION_SECONDS = {
@@ -63,10 +65,8 @@ ACTION_SECONDS = {
 #: The robot actions that get seeded ExecutionOptions (faults).
 FAULTY = ("navigate", "pick", "place", "detect", "open", "close", "charge")
 #: Poses a robot's trail keeps (about; the newest): a mission's drives whole, the last
-#: part of a day's.
+#: part of a day's. They are dropped a picture's line at a time (``TRAIL_CHUNK``).
 TRAIL_POINTS = 3000
-#: Poses of a trail drawn on one line of a picture (and dropped together).
-TRAIL_CHUNK = 40
 
 
 @dataclass(frozen=True)
@@ -447,8 +447,6 @@ class RobosimWorld:
     def adopt(self, step: PlanStep, observations: Sequence[Observation]) -> None:
         """A user's skill did ``step``: make the pyrobosim world agree, then take the
         observations it can (robot and object places, open/locked, battery)."""
-        from plan_bridge.robosim.adopt import adopt_step
-
         with self._lock:
             self.actions_run += 1
             adopt_step(self, step, observations)
@@ -491,16 +489,12 @@ class RobosimWorld:
             return all(self.truth(atom) for atom in self.goal)
 
     def snapshot(self) -> dict[str, Any]:
-        from plan_bridge.robosim.adopt import snapshot_world
-
         with self._lock:
-            return snapshot_world(self)
+            return snapshot_world(self, self._options, self._pending)
 
     def restore(self, data: dict[str, Any]) -> None:
-        from plan_bridge.robosim.adopt import restore_world
-
         with self._lock:
-            restore_world(self, data)
+            self._pending = restore_world(self, data, self._options)
 
     def abandon_running(self) -> None:
         """Nothing to undo: a checkpoint is taken between actions, and the restored
@@ -573,8 +567,6 @@ class RobosimWorld:
 
     def scene(self) -> tuple[str, str]:
         """The picture of the world now, for viewers: (SVG text, caption)."""
-        from plan_bridge.robosim.picture import scene_picture
-
         return scene_picture(self)
 
     # -- end of the viewer's picture ------------------------------------------------------
