@@ -176,4 +176,4 @@ def test_the_skills_of_the_world_folder_are_the_robosim_ones(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     assert main(["skills", str(TWO)]) == 0
-    assert "8 domain skills" in capsys.readouterr().out
+    assert "9 domain skills" in capsys.readouterr().out
