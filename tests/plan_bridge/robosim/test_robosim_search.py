@@ -125,6 +125,8 @@ def test_two_robots_look_at_different_places_and_find_it_sooner_than_one() -> No
     assert two_found[0] < one_found[0]
     searches = [d["reason"] for d in two.executive.report.decisions if d["decision"] == "search"]
     assert any(reason.startswith("soda found at shelf_board") for reason in searches)
+    # A place ruled out while the other robot drives: they look further at once.
+    assert any(reason.endswith("the robots look further") for reason in searches)
 
 
 def test_an_object_never_heard_of_seen_on_the_way_joins_the_knowledge_base() -> None:
