@@ -343,6 +343,7 @@ class Executive(PlanContainer):
 
     def _run_plan(self, plan: list[PlanStep], first_index: int) -> tuple[str, int | None]:
         """Run ``plan``; return (outcome, index in ``plan`` of the first unfinished step)."""
+        self._found = ""  # a search's stop is for the plan it stopped (orders replan anyway)
         compiled = compile_plan(
             plan,
             self.skills,
