@@ -4,10 +4,10 @@ A copy is a run of 6 or more identical lines at two places: lines compared with 
 white space folded; blank lines, comments, docstrings and import statements left out
 (prose, and the names a module uses, are no logic). Same-shape declarations kept
 on purpose are listed in :data:`KEPT_DECLARATIONS`, each with its reason (and in
-docs/architecture.md, "Same-shape declarations we keep"); copies in code another
-change is reworking are in :data:`KNOWN_COPIES_TO_REMOVE`. Both lists only shrink: a
-listed copy that is gone fails the second test. An entry is the two files (sorted)
-and the first line of the copy, white space folded.
+docs/architecture.md, "Same-shape declarations we keep"); every other copy fails the
+first test. The list only shrinks: a listed declaration that is gone fails the second
+test. An entry is the two files (sorted) and the first line of the copy, white space
+folded.
 """
 
 from __future__ import annotations
@@ -60,12 +60,6 @@ KEPT_DECLARATIONS: dict[Key, str] = {
     ("plan_bridge/missions/mission.py", "plan_bridge/missions/target.py", "if TYPE_CHECKING:"): (
         "plan_bridge.missions.mission re-exports target's names where domain folders import them"
     ),
-}
-
-#: Copies in plan_bridge.execution and .orders and in the viewer, which another
-#: change is reworking (issue 38); they go there.
-KNOWN_COPIES_TO_REMOVE: set[Key] = {
-    ("smach/introspection/static/control.js", "smach/introspection/static/orders.js", "}"),
 }
 
 
@@ -161,16 +155,15 @@ def find_copies(src: Path, min_lines: int = MIN_LINES) -> list[Copy]:
     return sorted(copies, key=lambda c: (c.first, c.first_line, c.second, c.second_line))
 
 
-def test_src_has_no_copy_of_six_lines_or_more_but_the_listed_ones() -> None:
-    listed = KEPT_DECLARATIONS.keys() | KNOWN_COPIES_TO_REMOVE
-    unlisted = [str(c) for c in find_copies(SRC) if c.key not in listed]
+def test_src_has_no_copy_of_six_lines_or_more_but_the_kept_declarations() -> None:
+    unlisted = [str(c) for c in find_copies(SRC) if c.key not in KEPT_DECLARATIONS]
     assert unlisted == [], "share these (or, for a declaration, list it and say why)"
 
 
-def test_every_listed_copy_still_exists() -> None:
+def test_every_kept_declaration_still_exists() -> None:
     found = {c.key for c in find_copies(SRC)}
-    gone = sorted((KEPT_DECLARATIONS.keys() | KNOWN_COPIES_TO_REMOVE) - found)
-    assert gone == [], f"remove these from the lists of tests/test_duplicates.py: {gone}"
+    gone = sorted(KEPT_DECLARATIONS.keys() - found)
+    assert gone == [], f"remove these from KEPT_DECLARATIONS: {gone}"
 
 
 def test_a_copy_is_found_across_files_and_in_one_file_with_its_whole_length(

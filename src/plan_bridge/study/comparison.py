@@ -21,20 +21,13 @@ table (every metric, cell and approach), for a reader who wants one family.
 
 from __future__ import annotations
 
-from collections import defaultdict
 from collections.abc import Iterable
 from typing import Any
 
+from plan_bridge.study.cells import NA, cells, median_comparison
 from plan_bridge.study.order_streams import order_comparisons
 from plan_bridge.study.runs import cell_number
-from plan_bridge.study.statistics import (
-    fisher_exact,
-    holm,
-    mann_whitney_u,
-    median_ci,
-    newcombe,
-    wilson,
-)
+from plan_bridge.study.statistics import fisher_exact, holm, newcombe, wilson
 
 __all__ = ["METRICS", "compare_approaches", "format_p"]
 
@@ -52,38 +45,12 @@ def format_p(p: float | str) -> str:
     return "<0.0001" if p < 1e-4 else f"{p:.4f}"
 
 
-def _time_comparison(ref: list[float], other: list[float]) -> dict[str, Any]:
-    if not ref or not other:
-        return {"reference": "n/a", "other": "n/a", "difference": "n/a", "test": "", "p": "n/a"}
-    rm, rl, rh = median_ci(ref)
-    om, ol, oh = median_ci(other)
-    _, p = mann_whitney_u(ref, other)
-    return {
-        "reference": f"{rm:.3g} [{rl:.3g}, {rh:.3g}]",
-        "other": f"{om:.3g} [{ol:.3g}, {oh:.3g}]",
-        "difference": f"{rm - om:+.3g} (medians)",
-        "test": "Mann-Whitney U",
-        "p": p,
-    }
-
-
 def compare_approaches(
     rows: Iterable[dict[str, str]], reference: str = "planned"
 ) -> list[dict[str, Any]]:
     """One row per (cell, approach other than ``reference``, metric)."""
-    cells: dict[tuple[str, str, str, float], dict[str, list[dict[str, str]]]] = defaultdict(
-        lambda: defaultdict(list)
-    )
-    for row in rows:
-        cell = (
-            row["target"],
-            row["variant"],
-            row.get("orders") or "",
-            cell_number(row["fault_rate"]),
-        )
-        cells[cell][row["approach"]].append(row)
     out: list[dict[str, Any]] = []
-    for (target, variant, orders, rate), by_approach in sorted(cells.items()):
+    for (target, variant, orders, rate), by_approach in sorted(cells(rows).items()):
         ref_rows = by_approach.get(reference)
         if not ref_rows:
             continue
@@ -121,26 +88,13 @@ def compare_approaches(
                 column = METRICS[metric][0]
                 ref = [cell_number(r[column]) for r in ref_rows if r["goal_reached"] == "True"]
                 other = [cell_number(r[column]) for r in other_rows if r["goal_reached"] == "True"]
-                result = _time_comparison(ref, other)
-                out.append(
-                    {
-                        **base,
-                        "metric": metric,
-                        "n_reference": len(ref),
-                        "n_approach": len(other),
-                        "value_reference": result["reference"],
-                        "value_approach": result["other"],
-                        "difference": result["difference"],
-                        "test": result["test"],
-                        "p": result["p"],
-                    }
-                )
+                out.append({**base, **median_comparison(metric, ref, other)})
             if orders:
                 out += [{**base, **c} for c in order_comparisons(ref_rows, other_rows)]
     tested = [i for i, c in enumerate(out) if isinstance(c["p"], float)]
     adjusted = holm([out[i]["p"] for i in tested])
     for c in out:
-        c["p_holm"] = "n/a"
+        c["p_holm"] = NA
     for i, p in zip(tested, adjusted, strict=True):
         out[i]["p_holm"] = p
     return out

@@ -18,13 +18,13 @@ every run counts (not only those that reached "the goal"):
 
 from __future__ import annotations
 
-from collections import defaultdict
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
+from plan_bridge.study.cells import NA, cell_columns, cells, errors, median_comparison
 from plan_bridge.study.runs import APPROACHES, cell_label, cell_number
-from plan_bridge.study.statistics import mann_whitney_u, median_ci
+from plan_bridge.study.statistics import median_ci
 
 __all__ = [
     "ORDER_METRICS",
@@ -34,8 +34,6 @@ __all__ = [
     "order_section",
     "summarise_orders",
 ]
-
-NA = "n/a"
 
 #: metric -> (column of results.csv, label); ``done_share`` is orders done / arrived.
 ORDER_METRICS = {
@@ -68,18 +66,6 @@ def _values(rows: Sequence[dict[str, str]], column: str) -> list[float]:
     return [v for r in rows if (v := per_run(r, column)) is not None]
 
 
-def _cells(
-    rows: Iterable[dict[str, str]],
-) -> dict[tuple[str, str, str, float], dict[str, list[dict[str, str]]]]:
-    cells: dict[tuple[str, str, str, float], dict[str, list[dict[str, str]]]] = defaultdict(
-        lambda: defaultdict(list)
-    )
-    for row in order_rows(rows):
-        key = (row["target"], row["variant"], row["orders"], cell_number(row["fault_rate"]))
-        cells[key][row["approach"]].append(row)
-    return cells
-
-
 def _median(values: list[float]) -> tuple[float | str, float | str, float | str]:
     if not values:
         return (NA, NA, NA)
@@ -89,7 +75,7 @@ def _median(values: list[float]) -> tuple[float | str, float | str, float | str]
 def summarise_orders(rows: Iterable[dict[str, str]]) -> list[dict[str, Any]]:
     """One row per cell of runs that served an orders file (see the module doc)."""
     summary: list[dict[str, Any]] = []
-    for (target, variant, orders, rate), by_approach in sorted(_cells(rows).items()):
+    for cell, by_approach in sorted(cells(order_rows(rows)).items()):
         for approach, items in sorted(by_approach.items(), key=lambda kv: _rank(kv[0])):
 
             def total(column: str, items: list[dict[str, str]] = items) -> int:
@@ -104,15 +90,8 @@ def summarise_orders(rows: Iterable[dict[str, str]]) -> list[dict[str, Any]]:
             p95 = _median(_values(items, "latency_p95_s"))
             summary.append(
                 {
-                    "target": target,
-                    "variant": variant,
-                    "orders": orders,
-                    "approach": approach,
-                    "fault_rate": rate,
-                    "runs": len(items),
-                    "errors": sum(
-                        1 for r in items if r["outcome"] in ("error", "timeout", "crashed")
-                    ),
+                    **cell_columns(cell, approach, items),
+                    "errors": errors(items),
                     "orders_arrived": arrived,
                     "orders_done": total("orders_done"),
                     "done_share": round(total("orders_done") / arrived, 4) if arrived else NA,
@@ -141,43 +120,15 @@ def _rank(approach: str) -> tuple[int, str]:
     return (known.index(approach) if approach in known else 99, approach)
 
 
-def _compare(ref: list[float], other: list[float]) -> dict[str, Any]:
-    if not ref or not other:
-        return {"reference": NA, "other": NA, "difference": NA, "test": "", "p": NA}
-    rm, rl, rh = median_ci(ref)
-    om, ol, oh = median_ci(other)
-    _, p = mann_whitney_u(ref, other)
-    return {
-        "reference": f"{rm:.3g} [{rl:.3g}, {rh:.3g}]",
-        "other": f"{om:.3g} [{ol:.3g}, {oh:.3g}]",
-        "difference": f"{rm - om:+.3g} (medians)",
-        "test": "Mann-Whitney U",
-        "p": p,
-    }
-
-
 def order_comparisons(
     ref_rows: Sequence[dict[str, str]], other_rows: Sequence[dict[str, str]]
 ) -> list[dict[str, Any]]:
     """The order metrics of one cell, ``other_rows`` against the reference's ``ref_rows``
     (every run counts; a run without a value, e.g. no order done, has no latency)."""
-    out = []
-    for metric, (column, _) in ORDER_METRICS.items():
-        ref, other = _values(ref_rows, column), _values(other_rows, column)
-        result = _compare(ref, other)
-        out.append(
-            {
-                "metric": metric,
-                "n_reference": len(ref),
-                "n_approach": len(other),
-                "value_reference": result["reference"],
-                "value_approach": result["other"],
-                "difference": result["difference"],
-                "test": result["test"],
-                "p": result["p"],
-            }
-        )
-    return out
+    return [
+        median_comparison(metric, _values(ref_rows, column), _values(other_rows, column))
+        for metric, (column, _) in ORDER_METRICS.items()
+    ]
 
 
 def _pct(value: Any) -> str:

@@ -17,6 +17,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
+from plan_bridge.study.cells import NA, cell_columns, errors
 from plan_bridge.study.comparison import compare_approaches, format_p
 from plan_bridge.study.environment import PLANNER_PACKAGES, read_sessions
 from plan_bridge.study.figures import draw_figures
@@ -31,8 +32,6 @@ from plan_bridge.study.runs import (
 from plan_bridge.study.statistics import median_ci, wilson
 
 __all__ = ["authoring_cost", "fault_model", "summarise_results", "wilson", "write_report"]
-
-NA = "n/a"
 
 
 def summarise_results(rows: Iterable[dict[str, str]]) -> list[dict[str, Any]]:
@@ -62,17 +61,12 @@ def summarise_results(rows: Iterable[dict[str, str]]) -> list[dict[str, Any]]:
         )
         summary.append(
             {
-                "target": target,
-                "variant": variant,
-                "orders": orders,
-                "approach": approach,
-                "fault_rate": rate,
-                "runs": len(items),
+                **cell_columns((target, variant, orders, rate), approach, items),
                 "successes": len(ok),
                 "success_rate": round(len(ok) / len(items), 4),
                 "ci_low": round(low, 4),
                 "ci_high": round(high, 4),
-                "errors": sum(1 for r in items if r["outcome"] in ("error", "timeout", "crashed")),
+                "errors": errors(items),
                 "median_wall_time_s": wall[0],
                 "median_wall_ci_low": wall[1],
                 "median_wall_ci_high": wall[2],

@@ -48,6 +48,20 @@ window.smachPaneButton = (id, text, title, onClick) => {
   return button;
 };
 
+// What the control panel (control.js) and the orders panel (orders.js) both read: the
+// server's /api/info (null when it cannot be read) and the per-run control token of
+// the URL's #token=... (null without one).
+window.smachServer = {
+  info: () =>
+    fetch("/api/info", { cache: "no-store" })
+      .then((r) => r.json())
+      .catch(() => null),
+  token: () => {
+    const m = /(?:^|[#&])token=([A-Za-z0-9_\-]+)/.exec(location.hash || "");
+    return m ? m[1] : null;
+  },
+};
+
 async function getJSON(url) {
   const r = await fetch(url, { cache: "no-store" });
   if (!r.ok) throw new Error(`${url}: ${r.status}`);

@@ -10,11 +10,6 @@
   const escText = (text) => String(text).replace(/[&<>"']/g, (c) => ({ "&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;", "'": "&#39;" })[c]);
   const viewer = () => window.smachViewer || {};
 
-  function readToken() {
-    const m = /(?:^|[#&])token=([A-Za-z0-9_\-]+)/.exec(location.hash || "");
-    return m ? m[1] : null;
-  }
-
   function button(id, text, title, onClick) {
     const b = document.createElement("button");
     b.id = id;
@@ -206,19 +201,15 @@
   }
 
   async function start() {
-    let info;
-    try {
-      info = await (await fetch("/api/info", { cache: "no-store" })).json();
-    } catch (err) {
-      return;
-    }
+    const info = await window.smachServer.info();
+    if (!info) return;
     if (!info.controls) {
       // A journal (or a run without controls): show the recorded control state, if any.
       setInterval(replayPoll, 500);
       return;
     }
     C.enabled = true;
-    C.token = readToken();
+    C.token = window.smachServer.token();
     const first = await (await fetch("/api/control", { cache: "no-store" })).json();
     build(first.actions || []);
     render(first);

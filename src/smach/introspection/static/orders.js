@@ -15,11 +15,6 @@
   const byId = (id) => document.getElementById(id);
   const esc = (text) => String(text).replace(/[&<>"']/g, (c) => `&#${c.charCodeAt(0)};`);
 
-  function readToken() {
-    const m = /(?:^|[#&])token=([A-Za-z0-9_\-]+)/.exec(location.hash || "");
-    return m ? m[1] : null;
-  }
-
   function setup() {
     const section = document.createElement("section");
     section.id = "orders";
@@ -139,12 +134,8 @@
   }
 
   async function start() {
-    let info;
-    try {
-      info = await (await fetch("/api/info", { cache: "no-store" })).json();
-    } catch (err) {
-      return;
-    }
+    const info = await window.smachServer.info();
+    if (!info) return;
     O.live = Boolean(info.live);
     if (info.controls) {
       try {
@@ -154,7 +145,7 @@
         O.canOrder = false;
       }
     }
-    O.token = readToken();
+    O.token = window.smachServer.token();
     if (O.canOrder && !O.token) {
       for (const el of byId("order-form").elements) el.disabled = true;
       message("read-only: open the URL with its #token=... to send orders", true);
