@@ -37,7 +37,7 @@ from plan_bridge.errors import PlanBridgeError
 from plan_bridge.maps.graph import PlaceMap
 from plan_bridge.maps.model import WorldModel
 from plan_bridge.maps.search import NEAR_M, ObjectNotFoundError, place_weights, search_order
-from plan_bridge.pddl.spec import ProblemSpec
+from plan_bridge.pddl.spec import ProblemSpec, without_actions
 from plan_bridge.pddl.task import Fact, PlanningTask, task_from_spec
 
 __all__ = [
@@ -108,6 +108,9 @@ class RouteTasks:
         self.model = model
         self.graph = graph if graph is not None else PlaceMap(model)
         self.domain_text = DOMAIN_PATH.read_text(encoding="utf-8")
+        # A task with no object to look for plans without the search action: grounded
+        # over every robot, object and place, it made a fleet's plans 10-20x slower.
+        self._domain_without_search = without_actions(self.domain_text, ["search"])
         # PDDL is read in lower case: the world's names by their lower-case form.
         self._names = {name.lower(): name for name in model.names}
         self._tasks: OrderedDict[tuple[object, ...], PlanningTask] = OrderedDict()
@@ -176,20 +179,24 @@ class RouteTasks:
         robots: Iterable[str] | None = None,
         closed: frozenset[str] | None = None,
         search_at: Mapping[str, Sequence[str]] | None = None,
+        *,
+        every_action: bool = False,
     ) -> PlanningTask:
         """The task of ``goal`` (atoms of the map domain) from the belief ``facts``, for
         ``robots`` (lower-case names; all when None). ``closed``: the hallways to
         route round (by default those the belief does not hold open; a part of a task
         is made with the task's own, :meth:`closed_for`). ``search_at``: a lost object
         -> the places this task looks for it at (by default the first ones of
-        :meth:`search_order`, one per robot; a fleet gives each robot its own)."""
+        :meth:`search_order`, one per robot; a fleet gives each robot its own).
+        A task with no lost object to look for leaves the ``search`` action out,
+        unless ``every_action`` (a world's task, which skills are checked against)."""
         goal = tuple(goal)
         self._learn(facts)
         if closed is None:
             closed = self._closed(facts)
         needs = self._needs(facts, goal, robots, closed, search_at or {})
-        spec = self._spec(facts, goal, needs, closed)
-        key = (spec.objects, _static(spec), spec.goal)
+        spec = self._spec(facts, goal, needs, closed, every_action or bool(needs.searches))
+        key = (spec.objects, _static(spec), spec.goal, spec.domain is self.domain_text)
         with self._lock:
             cached = self._tasks.get(key)
             if cached is not None:
@@ -414,6 +421,7 @@ class RouteTasks:
         goal: Sequence[Fact],
         needs: _Needs,
         closed: frozenset[str],
+        every_action: bool,
     ) -> ProblemSpec:
         model = self.model
         places = list(needs.places)
@@ -449,7 +457,7 @@ class RouteTasks:
         for item, spots in needs.searches.items():
             init.update(("may-hold", spot, item) for spot in spots)
         return ProblemSpec(
-            self.domain_text,
+            self.domain_text if every_action else self._domain_without_search,
             f"{_pddl_name(model.name)}-task",
             tuple(objects),
             tuple(sorted(init)),

@@ -227,7 +227,7 @@ def load_world_target(
         before_parse()
     view = RouteTasks(model)
     try:
-        task = view.task_for(view.belief(), atoms)
+        task = view.task_for(view.belief(), atoms, every_action=True)
     except PlanBridgeError as exc:
         raise TargetError(f"{world_file}: no task for the goal: {exc}") from exc
     if prime is not None:

@@ -28,7 +28,13 @@ from typing import Any
 
 from plan_bridge.pddl.up_runtime import ensure_unified_planning
 
-__all__ = ["ProblemSpec", "domain_name_of", "domain_problem", "format_number"]
+__all__ = [
+    "ProblemSpec",
+    "domain_name_of",
+    "domain_problem",
+    "format_number",
+    "without_actions",
+]
 
 Fact = tuple[str, ...]
 _DOMAIN_NAME = re.compile(r"\(\s*define\s*\(\s*domain\s+([^\s()]+)", re.IGNORECASE)
@@ -40,6 +46,32 @@ def domain_name_of(domain_text: str) -> str:
     if match is None:
         raise ValueError("not a PDDL domain: no (define (domain NAME) ...)")
     return match.group(1).lower()
+
+
+def without_actions(domain_text: str, names: Iterable[str]) -> str:
+    """``domain_text`` with the actions ``names`` (``(:action NAME ...)`` or
+    ``(:durative-action NAME ...)``) left out: a task that cannot use an action plans
+    faster without it (a planner grounds every action over every object).
+
+    Raises ``ValueError`` naming an action the domain does not have.
+    """
+    text = domain_text
+    for name in names:
+        found = re.search(
+            rf"\(\s*:(?:durative-)?action\s+{re.escape(name)}(?=[\s()])", text, re.IGNORECASE
+        )
+        if found is None:
+            raise ValueError(f"the domain has no action {name!r} to leave out")
+        depth, end = 0, found.start()
+        for end in range(found.start(), len(text)):
+            if text[end] == "(":
+                depth += 1
+            elif text[end] == ")":
+                depth -= 1
+                if depth == 0:
+                    break
+        text = text[: found.start()] + text[end + 1 :]
+    return text
 
 
 def format_number(value: float) -> str:

@@ -97,6 +97,18 @@ def test_the_task_of_a_lost_object_lets_the_robot_search_the_first_place_in_orde
     assert "fridge_in" in task.objects_of_type("spot")
 
 
+def test_only_a_task_with_a_lost_object_carries_the_search_action() -> None:
+    # Grounded over every robot, object and place, an unusable search action made a
+    # fleet's plans an order of magnitude slower: tasks that look for nothing drop it.
+    view = RouteTasks(flat())
+    lost = view.task_for(lost_soda(), [("holding", "robot", "soda")])
+    seen = lost_soda()
+    found = FactSnapshot(seen | {("at", "soda", "table_top")}, seen.values)
+    goal = [("holding", "robot", "soda")]
+    assert "search" in lost.actions and "search" not in view.task_for(found, goal).actions
+    assert "search" in view.task_for(found, goal, every_action=True).actions
+
+
 def test_the_search_order_weighs_fit_against_the_way_there() -> None:
     metres = {"fridge_in": 1.4, "table_top": 3.2, "cupboard_in": 7.1, "desk_top": 5.1}
     assert search_order(flat(), lost_soda(), "soda", metres) == [

@@ -2,9 +2,13 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
+import pytest
+
 from plan_bridge.pddl.restate import replace_init
 from plan_bridge.pddl.source import SourceText
-from plan_bridge.pddl.spec import ProblemSpec, domain_name_of
+from plan_bridge.pddl.spec import ProblemSpec, domain_name_of, without_actions
 from plan_bridge.pddl.task import task_from_spec
 
 DOMAIN = """
@@ -91,3 +95,19 @@ def test_restating_a_problem_replaces_its_init_numbers_and_goal_and_keeps_the_re
     assert "(= (metres hall lab) 2.5)" in out and "(= (metres hall lab) 4)" not in out
     assert "(at 5 (door lab hall))" in out  # a timed initial literal stays
     assert "(:goal (and (at r1 hall)))" in out and "(:objects r1 - robot hall lab - room)" in out
+
+
+def test_an_action_left_out_of_a_domain_is_gone_and_the_rest_still_plans() -> None:
+    wait = (
+        "(:durative-action wait :parameters (?r - robot) :duration (= ?duration 1)\n"
+        "    :condition (at start (at ?r hall)) :effect (at end (at ?r hall)))\n  "
+    )
+    domain = DOMAIN.replace("(:action go", wait + "(:action go")
+    shorter = without_actions(domain, ["WAIT"])
+    assert "wait" not in shorter and shorter.split() == DOMAIN.split()
+    assert list(task_from_spec(replace(spec(), domain=shorter)).actions) == ["go"]
+
+
+def test_leaving_out_an_action_the_domain_does_not_have_names_it() -> None:
+    with pytest.raises(ValueError, match="no action 'fly'"):
+        without_actions(DOMAIN, ["fly"])
