@@ -33,7 +33,7 @@ import dataclasses
 import math
 import threading
 import time
-import weakref
+from collections import OrderedDict
 from collections.abc import Iterable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
@@ -60,6 +60,8 @@ __all__ = ["FleetPlanner"]
 _HELPERS = 2
 #: The planner named for a robot that kept the rest of its plan.
 _KEPT = "kept"
+#: Action models kept for the last tasks planned (tasks come back from the view's cache).
+_MODELS_KEPT = 32
 
 
 @dataclasses.dataclass
@@ -77,9 +79,8 @@ class FleetPlanner:
         self.inner = inner
         self.view = view
         self._last: dict[str, _RobotPlan] = {}
-        self._models: weakref.WeakKeyDictionary[PlanningTask, ActionModel] = (
-            weakref.WeakKeyDictionary()
-        )
+        # The last tasks' models (a model holds its task: weak keys would never let go).
+        self._models: OrderedDict[PlanningTask, ActionModel] = OrderedDict()
         self._lock = threading.Lock()
 
     @property
@@ -319,6 +320,10 @@ class FleetPlanner:
             model = self._models.get(task)
             if model is None:
                 model = self._models[task] = ActionModel(task)
+                while len(self._models) > _MODELS_KEPT:
+                    self._models.popitem(last=False)
+            else:
+                self._models.move_to_end(task)
             return model
 
     def _merged(

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import gc
 from typing import Any
 
 import pytest
@@ -91,3 +92,18 @@ def test_a_lost_object_is_looked_for_only_where_it_was_not_looked_for_yet(
     result = FleetPlanner(kairos, view).solve(task, timeout=30)
     assert result.solved
     assert {s.arguments[2] for s in result.actions if s.action == "search"} == {"shelf_top"}
+
+
+def test_the_fleet_keeps_models_only_for_its_last_tasks(kairos: Any, house: Any) -> None:
+    # A day of orders plans hundreds of tasks: the planner's action models (each holds
+    # its task) must not pile up. (Weak keys did: a model's task kept its key alive.)
+    view = RouteTasks(house(rover=True))
+    fleet = FleetPlanner(kairos, view)
+    places = ("desk_top", "shelf_top")
+    for n in range(60):
+        view._tasks.clear()  # a new task object every time
+        goal = [("at", "apple", places[n % 2]), ("at", "pear", places[(n + 1) % 2])]
+        assert fleet.solve(view.task_for(view.belief(), goal), timeout=30).solved
+    gc.collect()
+    models = [o for o in gc.get_objects() if isinstance(o, ActionModel)]
+    assert len(models) <= 40
