@@ -60,7 +60,7 @@ def _check(args: argparse.Namespace) -> int:
         for line in noted:
             print(f"warning: {problem.name}: {line}", file=sys.stderr)
         if args.probe is not None and problem == chosen.problems[-1]:
-            from plan_bridge.skills.ros_probe import print_probe
+            from plan_bridge.skills.ros.probe import print_probe
 
             unready = print_probe(setup.extra.get("skill_map"), loaded.task, args.probe)
         print(

@@ -475,7 +475,7 @@ def _start_mission(args: argparse.Namespace, target: Target, resources: Any) -> 
     fail_rate = options.fail_rate_for(target)
     skills_text = "domain skills" if target.has_own_skills else "symbolic skills"
     if target.skill_map_path is not None:
-        from plan_bridge.skills.ros_entries import runs_on_ros
+        from plan_bridge.skills.ros.entries import runs_on_ros
 
         ros = target.folder is not None and runs_on_ros(target.folder)
         # A map that binds actions to ROS 2: those run on the robot's servers.

@@ -196,7 +196,7 @@ def _run(args: argparse.Namespace) -> int:
     map_path = None if skill_map is None else skill_map.path
     unready: list[str] = []
     if args.probe is not None:
-        from plan_bridge.skills.ros_probe import print_probe
+        from plan_bridge.skills.ros.probe import print_probe
 
         unready = print_probe(skill_map, task, args.probe)
     if args.json:

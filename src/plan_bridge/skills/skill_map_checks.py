@@ -23,8 +23,8 @@ from typing import TYPE_CHECKING, Any
 
 from plan_bridge.pddl.constructs import did_you_mean
 from plan_bridge.skills.registry import REQUIRED_OUTCOMES, SkillFactory
-from plan_bridge.skills.ros_entries import ROS_KEYS, check_ros_entry, is_ros_entry
-from plan_bridge.skills.ros_skill_states import RosSkill
+from plan_bridge.skills.ros.entries import ROS_KEYS, check_ros_entry, is_ros_entry
+from plan_bridge.skills.ros.skill_states import RosSkill
 from plan_bridge.skills.skill_map_model import (
     ENTRY_KEYS,
     ConstantPick,
@@ -220,7 +220,7 @@ class _Reader:
         self, schema: ActionSchema, element: dict[str, Any], where: EntryLines
     ) -> SkillMapEntry | None:
         """An entry with ros_action, ros_service or ros_topic (see
-        :mod:`~plan_bridge.skills.ros_entries`)."""
+        :mod:`~plan_bridge.skills.ros.entries`)."""
         before = len(self.problems)
         variant = self.variant(schema.name, element, where.key("variant"))
         label = f"[{schema.name}]" + (f" variant {variant!r}" if variant else "")

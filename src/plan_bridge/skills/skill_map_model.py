@@ -21,7 +21,7 @@ from plan_bridge.skills.skill_map_source import factory_name, parameter_identifi
 if TYPE_CHECKING:
     import smach
     from plan_bridge.pddl.task import ActionSchema
-    from plan_bridge.skills.ros_entries import RosEntry
+    from plan_bridge.skills.ros.entries import RosEntry
 
 __all__ = [
     "ENTRY_KEYS",
@@ -197,7 +197,7 @@ class SkillMapEntry:
     variant: str = ""
     ros: RosEntry | None = None
     """For an entry with ``ros_action``, ``ros_service`` or ``ros_topic``: what it calls
-    (:mod:`~plan_bridge.skills.ros_entries`); ``target`` is then ``"ros_action NAME"``."""
+    (:mod:`~plan_bridge.skills.ros.entries`); ``target`` is then ``"ros_action NAME"``."""
 
     @property
     def location(self) -> str:

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from plan_bridge.cli import main
-from plan_bridge.skills.ros_entries import runs_on_ros
+from plan_bridge.skills.ros.entries import runs_on_ros
 from smach.introspection.fidelity import journal_problems
 from smach.introspection.journal import read_journal
 

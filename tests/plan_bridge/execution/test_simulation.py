@@ -14,7 +14,7 @@ import pytest
 from plan_bridge.execution.simulation import SimulatedWorld
 from plan_bridge.execution.snapshots import SnapshotError
 from plan_bridge.pddl.task import PlanningTask, load_task
-from plan_bridge.skills.ros_entries import runs_on_ros
+from plan_bridge.skills.ros.entries import runs_on_ros
 
 ROOMS = Path(__file__).parents[1] / "data" / "rooms"
 

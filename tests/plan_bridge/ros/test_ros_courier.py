@@ -22,7 +22,7 @@ pytest.importorskip("smach.ros.rclpy_api", reason="needs rclpy (the ros extra)")
 from plan_bridge.execution.events import StepFinished
 from plan_bridge.execution.executive import Executive
 from plan_bridge.missions.mission import load_target
-from plan_bridge.skills.ros_skill_states import forget_servers
+from plan_bridge.skills.ros.skill_states import forget_servers
 from smach.ros.dds import FAST_DDS_2_VARIABLE, FAST_DDS_3_VARIABLE
 
 pytestmark = pytest.mark.ros

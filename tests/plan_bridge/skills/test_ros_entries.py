@@ -17,10 +17,10 @@ pytest.importorskip("smach.ros.rclpy_api", reason="needs rclpy (the ros extra)")
 import smach
 from plan_bridge.pddl.task import ActionSchema, Parameter
 from plan_bridge.skills.registry import SkillRegistry
-from plan_bridge.skills.ros_conditions import parse_condition
-from plan_bridge.skills.ros_entries import RosEntry
-from plan_bridge.skills.ros_skill_states import RosCall, RosSkill
-from plan_bridge.skills.ros_types import RosTypeError, install_hint, message_data
+from plan_bridge.skills.ros.conditions import parse_condition
+from plan_bridge.skills.ros.entries import RosEntry
+from plan_bridge.skills.ros.skill_states import RosCall, RosSkill
+from plan_bridge.skills.ros.types import RosTypeError, install_hint, message_data
 from plan_bridge.skills.skill_map import SkillMap, SkillMapError, load_skill_map
 
 

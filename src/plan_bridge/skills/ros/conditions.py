@@ -22,7 +22,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from plan_bridge.skills.ros_types import RosTypeError, field_at
+from plan_bridge.skills.ros.types import RosTypeError, field_at
 
 __all__ = [
     "Comparison",

@@ -20,10 +20,10 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, TextIO
 
-from plan_bridge.skills.ros_conditions import substitute, template_parameters
+from plan_bridge.skills.ros.conditions import substitute, template_parameters
 
 if TYPE_CHECKING:
-    from plan_bridge.skills.ros_entries import RosEntry
+    from plan_bridge.skills.ros.entries import RosEntry
     from plan_bridge.skills.skill_map import SkillMap, SkillMapEntry
 
 __all__ = ["ProbeResult", "print_probe", "probe_skill_map"]

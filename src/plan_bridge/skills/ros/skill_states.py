@@ -38,10 +38,10 @@ from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
 import smach
-from plan_bridge.skills.ros_types import assign, message_data
+from plan_bridge.skills.ros.types import assign, message_data
 
 if TYPE_CHECKING:
-    from plan_bridge.skills.ros_entries import RosEntry
+    from plan_bridge.skills.ros.entries import RosEntry
 
 __all__ = ["GONE_WAIT", "RosCall", "RosSkill", "forget_servers"]
 
@@ -278,7 +278,7 @@ class _FeedbackRecorder:
         if self.mode == "none":
             return
         if isinstance(self.mode, tuple):
-            from plan_bridge.skills.ros_conditions import lookup
+            from plan_bridge.skills.ros.conditions import lookup
 
             data = {}
             for path in self.mode:

@@ -19,7 +19,7 @@ every field path and condition is checked against the message definition, every
 table lookup against the table's file and the problem's objects, every outcome
 against ``outcome_map``; problems go to the map's list, each at its line. The
 result is a :class:`RosEntry`, and the skill factory registered for it is a
-:class:`~plan_bridge.skills.ros_skill_states.RosSkill`. docs/plan-bridge.md ("Skill
+:class:`~plan_bridge.skills.ros.skill_states.RosSkill`. docs/plan-bridge.md ("Skill
 maps") describes the entries.
 """
 
@@ -34,13 +34,13 @@ from typing import TYPE_CHECKING, Any
 
 from plan_bridge.pddl.constructs import did_you_mean
 from plan_bridge.skills.registry import REQUIRED_OUTCOMES
-from plan_bridge.skills.ros_conditions import (
+from plan_bridge.skills.ros.conditions import (
     Condition,
     parse_condition,
     substitute,
     template_parameters,
 )
-from plan_bridge.skills.ros_types import RosTypeError, field_at, resolve_interface, value_problem
+from plan_bridge.skills.ros.types import RosTypeError, field_at, resolve_interface, value_problem
 from plan_bridge.skills.skill_map_source import shown_value, toml_text
 
 if TYPE_CHECKING:
