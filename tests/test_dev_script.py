@@ -126,7 +126,7 @@ def test_dev_test_combines_coverage_data_written_after_the_report(tmp_path: Path
     calls = (tmp_path / "calls.log").read_text().splitlines()
     assert calls[-2:] == [
         "python -m coverage combine --append --quiet .",
-        "python -m coverage report --format=total",
+        "python -m coverage report --format=total --ignore-errors",
     ]
     # The fake coverage combined nothing: the file it could not read is gone all the same.
     assert "could not be read: .coverage.vm.pid1.late" in done.stderr

@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 import json
+import resource
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
@@ -17,12 +17,20 @@ DOMAINS = Path(__file__).resolve().parents[3] / "domains"
 SCRIPT = Path(sys.executable).with_name("plan-bridge")
 
 
+def _cpu_of_children() -> float:
+    used = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return used.ru_utime + used.ru_stime
+
+
 def _run(*args: str) -> tuple[subprocess.CompletedProcess[str], float]:
-    started = time.monotonic()
+    """The program's result and the CPU seconds it used: the work it did, which a busy
+    machine does not stretch as it does the time it took (about 0.2 s for --help; twice
+    that measured by coverage, docs/testing.md)."""
+    before = _cpu_of_children()
     completed = subprocess.run(
         [str(SCRIPT), *args], capture_output=True, text=True, timeout=60, check=False
     )
-    return completed, time.monotonic() - started
+    return completed, _cpu_of_children() - before
 
 
 def test_every_subcommand_is_in_the_table() -> None:
@@ -61,19 +69,19 @@ def test_subcommand_modules_do_not_import_the_cli_table_back() -> None:
 
 @pytest.mark.skipif(not SCRIPT.exists(), reason="console script not installed")
 def test_help_answers_fast_and_lists_plan() -> None:
-    completed, elapsed = _run("--help")
+    completed, cpu = _run("--help")
     assert completed.returncode == 0
     assert "plan" in completed.stdout
-    assert elapsed < 1.0  # 0.1 s measured; generous for loaded CI machines
+    assert cpu < 1.0, cpu  # the planners are not imported
 
 
 @pytest.mark.skipif(not SCRIPT.exists(), reason="console script not installed")
 def test_missing_file_is_a_fast_bad_input_error(tmp_path: Path) -> None:
-    completed, elapsed = _run("plan", str(tmp_path / "d.pddl"), str(tmp_path / "p.pddl"))
+    completed, cpu = _run("plan", str(tmp_path / "d.pddl"), str(tmp_path / "p.pddl"))
     assert completed.returncode == 2
     assert "domain file not found" in completed.stderr
     assert "Traceback" not in completed.stderr
-    assert elapsed < 1.5
+    assert cpu < 1.5, cpu
 
 
 @pytest.mark.skipif(not SCRIPT.exists(), reason="console script not installed")
