@@ -130,6 +130,7 @@ def test_dev_test_combines_coverage_data_written_after_the_report(tmp_path: Path
     ]
     # The fake coverage combined nothing: the file it could not read is gone all the same.
     assert "could not be read: .coverage.vm.pid1.late" in done.stderr
+    assert "1 coverage data file(s) came after the report, combined into .coverage" in done.stderr
     assert not list(tmp_path.glob(".coverage*"))
 
 
