@@ -280,6 +280,25 @@ def _long_journal(path: Path, actions: int, scale: float = 0.01) -> None:
 
 
 @pytest.mark.timeout(120)
+def test_the_first_view_reaches_the_gantt_script_however_late_it_loads(
+    browser: Any, tmp_path: Path
+) -> None:
+    """A replay gets one view, at the start: the page waits for all its scripts before
+    asking for it. It did not, and on a busy machine /api/view could answer before the
+    browser had run gantt.js: its button stayed hidden (scene.js and orders.js too)."""
+    journal = tmp_path / "long.jsonl"
+    _long_journal(journal, 30)
+    page = browser.new_page(viewport={"width": 1400, "height": 900})
+    page.route("**/static/gantt.js", lambda route: (time.sleep(1.0), route.continue_()))
+    with serve(JournalSource(journal), quiet=True) as viewer:
+        page.goto(viewer.url)
+        page.wait_for_selector("body[data-ready='1']", timeout=20_000)
+        page.wait_for_selector("#gantt-toggle:not([hidden])", timeout=10_000)
+        assert page.get_attribute("body", "data-gantt-rows") == "30"
+    page.close()
+
+
+@pytest.mark.timeout(120)
 def test_a_plan_of_150_actions_scrolls_under_a_fixed_axis_with_readable_labels(
     browser: Any, tmp_path: Path
 ) -> None:

@@ -717,7 +717,15 @@ async function main() {
   document.body.dataset.ready = "1";
 }
 
-main().catch((err) => {
-  document.body.dataset.error = String(err);
-  console.error(err);
-});
+// Started once every script of the page has run: control.js, gantt.js, scene.js and
+// orders.js listen for "smach:view", and the first view must reach them (a replay gets no
+// other). Started at once, the first /api/view could come back before the browser had
+// loaded them, as on a busy machine.
+function start() {
+  main().catch((err) => {
+    document.body.dataset.error = String(err);
+    console.error(err);
+  });
+}
+if (document.readyState === "loading") document.addEventListener("DOMContentLoaded", start);
+else start();
