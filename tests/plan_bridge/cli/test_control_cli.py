@@ -3,16 +3,12 @@
 from __future__ import annotations
 
 import json
-import re
-import signal
-import subprocess
-import sys
-import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from controlled_mission import ControlledMission, control
 
 from plan_bridge.cli import main
 from smach.introspection.journal import read_journal
@@ -22,64 +18,11 @@ ROOMS = Path(__file__).parents[1] / "data" / "rooms"
 pytestmark = pytest.mark.timeout(180)
 
 
-class Mission:
-    """`plan-bridge run ROOMS --control ...` in a subprocess; the control URL from stderr."""
+class Mission(ControlledMission):
+    """`plan-bridge run ROOMS --control --journal JOURNAL --json ...` in a subprocess."""
 
     def __init__(self, journal: Path, *extra: str) -> None:
-        self.process = subprocess.Popen(
-            [sys.executable, "-m", "plan_bridge", "run", str(ROOMS), "--control",
-             "--journal", str(journal), "--json", *extra],
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            text=True,
-        )  # fmt: skip
-        self.url = ""
-        found = threading.Event()
-        self.ended = threading.Event()
-        self.stderr: list[str] = []
-
-        def read() -> None:
-            assert self.process.stderr is not None
-            for line in self.process.stderr:
-                self.stderr.append(line)
-                if "the mission ended" in line:  # the viewer serves on until Ctrl-C
-                    self.ended.set()
-                match = re.match(r"control: (http://\S+)", line)
-                if match:
-                    self.url = match.group(1)
-                    found.set()
-
-        self.reader = threading.Thread(target=read, daemon=True)
-        self.reader.start()
-        self.stdout = ""
-        if not found.wait(60):
-            self.finish()
-            raise AssertionError("no control URL printed: " + "".join(self.stderr))
-
-    def finish(self) -> int:
-        """Wait for the mission (Ctrl-C its viewer once it ended; kill it after 120 s).
-
-        Closes its pipes and returns its exit code (130 when the Ctrl-C came before the
-        viewer waited for it: the tests read the outcome from --json instead).
-        """
-        deadline = time.monotonic() + 120
-        while self.process.poll() is None and not self.ended.is_set():
-            if time.monotonic() > deadline:
-                break
-            self.ended.wait(0.1)
-        if self.process.poll() is None and self.ended.is_set():
-            self.process.send_signal(signal.SIGINT)
-        try:
-            self.process.wait(max(1.0, deadline - time.monotonic()))
-        except subprocess.TimeoutExpired:
-            self.process.kill()
-            self.process.wait(10)
-        assert self.process.stdout is not None and self.process.stderr is not None
-        self.stdout = self.process.stdout.read()
-        self.process.stdout.close()
-        self.reader.join(10)
-        self.process.stderr.close()
-        return self.process.returncode
+        super().__init__(str(ROOMS), "--control", "--journal", str(journal), "--json", *extra)
 
 
 @pytest.fixture
@@ -87,16 +30,7 @@ def missions() -> Iterator[list[Mission]]:
     started: list[Mission] = []
     yield started
     for mission in started:
-        if mission.process.poll() is None:
-            mission.process.kill()
-        if not mission.process.stdout or not mission.process.stdout.closed:
-            mission.finish()
-
-
-def control(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
-    code = main(["control", *args])
-    out, err = capsys.readouterr()
-    return code, out, err
+        mission.end()
 
 
 def wait_status(capsys: pytest.CaptureFixture[str], url: str, text: str) -> str:

@@ -4,17 +4,13 @@ from a terminal (docs/orders.md, "Send orders while the mission runs")."""
 from __future__ import annotations
 
 import json
-import re
-import signal
-import subprocess
-import sys
-import threading
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
+from controlled_mission import ControlledMission, control
 
 from plan_bridge.cli import main
 from plan_bridge.cli.control import ONE_GOAL, orders_table
@@ -25,66 +21,14 @@ ROOMS = Path(__file__).parents[1] / "data" / "rooms"
 pytestmark = pytest.mark.timeout(180)
 
 
-class Mission:
-    """`plan-bridge run ROOMS --control --start-paused ...` in a subprocess; the control
-    URL from its stderr. Started paused, so that a plan holds until `control resume`."""
+class Mission(ControlledMission):
+    """`plan-bridge run ROOMS --problem P --control --start-paused --json ...` in a
+    subprocess. Started paused, so that a plan holds until `control resume`."""
 
     def __init__(self, problem: str, *extra: str) -> None:
-        self.process = subprocess.Popen(
-            [sys.executable, "-m", "plan_bridge", "run", str(ROOMS), "--problem", problem,
-             "--control", "--start-paused", "--json", *extra],
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            text=True,
-        )  # fmt: skip
-        self.url = ""
-        found = threading.Event()
-        self.ended = threading.Event()
-        self.stderr: list[str] = []
-
-        def read() -> None:
-            assert self.process.stderr is not None
-            for line in self.process.stderr:
-                self.stderr.append(line)
-                if "the mission ended" in line:  # the viewer serves on until Ctrl-C
-                    self.ended.set()
-                match = re.match(r"control: (http://\S+)", line)
-                if match:
-                    self.url = match.group(1)
-                    found.set()
-
-        self.reader = threading.Thread(target=read, daemon=True)
-        self.reader.start()
-        self.stdout = ""
-        if not found.wait(60):
-            self.finish()
-            raise AssertionError("no control URL printed: " + "".join(self.stderr))
-
-    def finish(self) -> int:
-        """Wait for the mission to end (Ctrl-C its viewer then; kill it after 120 s),
-        close its pipes and return its exit code."""
-        deadline = time.monotonic() + 120
-        while self.process.poll() is None and not self.ended.is_set():
-            if time.monotonic() > deadline:
-                break
-            self.ended.wait(0.1)
-        if self.process.poll() is None and self.ended.is_set():
-            self.process.send_signal(signal.SIGINT)
-        try:
-            self.process.wait(max(1.0, deadline - time.monotonic()))
-        except subprocess.TimeoutExpired:
-            self.process.kill()
-            self.process.wait(10)
-        assert self.process.stdout is not None and self.process.stderr is not None
-        self.stdout = self.process.stdout.read()
-        self.process.stdout.close()
-        self.reader.join(10)
-        self.process.stderr.close()
-        return self.process.returncode
-
-    def figures(self) -> dict[str, Any]:
-        """The run's --json line (after :meth:`finish`)."""
-        return dict(json.loads(self.stdout.strip().splitlines()[-1]))
+        super().__init__(
+            str(ROOMS), "--problem", problem, "--control", "--start-paused", "--json", *extra
+        )
 
 
 @pytest.fixture
@@ -92,16 +36,7 @@ def missions() -> Iterator[list[Mission]]:
     started: list[Mission] = []
     yield started
     for mission in started:
-        if mission.process.poll() is None:
-            mission.process.kill()
-        if not mission.process.stdout or not mission.process.stdout.closed:
-            mission.finish()
-
-
-def control(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
-    code = main(["control", *args])
-    out, err = capsys.readouterr()
-    return code, out, err
+        mission.end()
 
 
 def listing(capsys: pytest.CaptureFixture[str], url: str) -> dict[str, dict[str, Any]]:

@@ -12,6 +12,7 @@ import pytest
 
 pytest.importorskip("smach.ros.rclpy_api", reason="needs rclpy (the ros extra)")
 
+from ros_context import nodes_in_own_context
 from test_msgs.srv import BasicTypes
 
 import smach
@@ -22,7 +23,6 @@ from plan_bridge.pddl.task import load_task
 from plan_bridge.planning.planner import PlanStep, get_planner
 from plan_bridge.skills.registry import SkillRegistry
 from smach.ros import IntrospectionServer
-from smach.ros.executor import SmachExecutor
 from smach.ros.rclpy_api import rclpy
 
 ROOMS = Path(__file__).parents[1] / "data" / "rooms"
@@ -32,19 +32,8 @@ pytestmark = [pytest.mark.ros, pytest.mark.timeout(120)]
 
 @pytest.fixture
 def nodes() -> Iterator[tuple[Any, Any]]:
-    context = rclpy.Context()
-    rclpy.init(context=context)
-    executive_node = rclpy.create_node("executive", context=context)
-    operator = rclpy.create_node("operator", context=context)
-    try:
+    with nodes_in_own_context("executive", "operator") as (executive_node, operator):
         yield executive_node, operator
-    finally:
-        helper = SmachExecutor._instances.get(id(context))
-        if helper is not None:
-            helper.shutdown()
-        operator.destroy_node()
-        executive_node.destroy_node()
-        rclpy.shutdown(context=context)
 
 
 class WaitAtPick(smach.State):

@@ -20,6 +20,7 @@ import pytest
 
 pytest.importorskip("smach.ros.rclpy_api", reason="needs rclpy (the ros extra)")
 
+from ros_context import nodes_in_own_context
 from std_msgs.msg import String
 from std_srvs.srv import Trigger
 from test_msgs.srv import BasicTypes
@@ -29,7 +30,6 @@ from plan_bridge.missions.mission import load_target
 from plan_bridge.missions.runner import MissionOptions, prepare_mission
 from plan_bridge.orders.order_executive import OrderExecutive
 from plan_bridge.ros.order_services import STATUS_DEPTH, OrderServices
-from smach.ros.executor import SmachExecutor
 from smach.ros.rclpy_api import DurabilityPolicy, QoSProfile, ReliabilityPolicy, rclpy
 
 ROOMS = Path(__file__).parents[1] / "data" / "rooms"
@@ -97,17 +97,8 @@ class Operator:
 
 @pytest.fixture
 def mission_node() -> Iterator[Any]:
-    context = rclpy.Context()
-    rclpy.init(context=context)
-    node = rclpy.create_node("mission", context=context)
-    try:
+    with nodes_in_own_context("mission") as (node,):
         yield node
-    finally:
-        helper = SmachExecutor._instances.get(id(context))
-        if helper is not None:
-            helper.shutdown()
-        node.destroy_node()
-        rclpy.shutdown(context=context)
 
 
 def test_orders_are_submitted_cancelled_and_listed_over_ros_and_each_change_published(

@@ -16,14 +16,14 @@ import pytest
 
 pytest.importorskip("smach.ros.rclpy_api", reason="needs rclpy (the ros extra)")
 
+from ros_context import nodes_in_own_context
+
 from plan_bridge.execution.executive import Executive, ReplanPolicy
 from plan_bridge.pddl.task import PlanningTask, load_task
 from plan_bridge.planning.planner import PlanStep, get_planner
 from plan_bridge.ros import decode_result, encode_result, remote_facts, ros_skill, ros_skills
 from plan_bridge.ros.protocol import action_topic
 from smach.ros.dds import profile_environment
-from smach.ros.executor import SmachExecutor
-from smach.ros.rclpy_api import rclpy
 
 pytestmark = pytest.mark.ros
 
@@ -92,17 +92,8 @@ class SkillServerProcess:
 
 @pytest.fixture
 def node() -> Iterator[Any]:
-    context = rclpy.Context()
-    rclpy.init(context=context)
-    node = rclpy.create_node("executive", context=context)
-    try:
-        yield node
-    finally:
-        helper = SmachExecutor._instances.get(id(context))
-        if helper is not None:
-            helper.shutdown()
-        node.destroy_node()
-        rclpy.shutdown(context=context)
+    with nodes_in_own_context("executive") as (executive_node,):
+        yield executive_node
 
 
 @pytest.fixture(scope="module")
