@@ -40,6 +40,7 @@ from plan_bridge.errors import PlanBridgeError
 from plan_bridge.orders.order import Order
 from plan_bridge.pddl.constructs import did_you_mean
 from plan_bridge.seeded_time import draw_time, is_seconds, read_time
+from plan_bridge.yaml_files import read_yaml_with_lines
 
 __all__ = ["OrderFileError", "OrderSchedule", "OrderStream", "load_orders", "parse_orders"]
 
@@ -149,33 +150,10 @@ class OrderSchedule:
 
 def load_orders(path: str | Path) -> OrderSchedule:
     """The orders file at ``path`` (raises :class:`OrderFileError`)."""
-    import yaml
-
-    file = Path(path)
-    try:
-        text = file.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise OrderFileError(f"{file}: cannot read the orders file: {exc.strerror or exc}") from exc
-    try:
-        node = yaml.compose(text)
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise OrderFileError(f"{file}: not valid YAML: {exc}") from exc
-    return parse_orders(data, str(file), _item_lines(node))
-
-
-def _item_lines(node: Any) -> dict[str, list[int]]:
-    """Each list item's line, under ``orders``/``streams`` (a bare list: ``orders``)."""
-    import yaml
-
-    lines: dict[str, list[int]] = {}
-    if isinstance(node, yaml.SequenceNode):
-        lines["orders"] = [item.start_mark.line + 1 for item in node.value]
-    elif isinstance(node, yaml.MappingNode):
-        for key, value in node.value:
-            if isinstance(value, yaml.SequenceNode):
-                lines[str(key.value)] = [item.start_mark.line + 1 for item in value.value]
-    return lines
+    data, lines = read_yaml_with_lines(path, "orders", OrderFileError)
+    if "" in lines:  # a bare list: the orders
+        lines["orders"] = lines.pop("")
+    return parse_orders(data, str(Path(path)), lines)
 
 
 def parse_orders(

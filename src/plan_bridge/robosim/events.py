@@ -43,6 +43,7 @@ from typing import Any
 from plan_bridge.errors import PlanBridgeError
 from plan_bridge.pddl.constructs import did_you_mean
 from plan_bridge.seeded_time import draw_time, read_time
+from plan_bridge.yaml_files import read_yaml_with_lines
 
 __all__ = ["KINDS", "EventError", "WorldEvent", "check_events", "load_events", "parse_events"]
 
@@ -112,22 +113,8 @@ class WorldEvent:
 
 def load_events(path: str | Path) -> list[WorldEvent]:
     """The events of a YAML file, in time order (raises :class:`EventError`)."""
-    import yaml
-
-    file = Path(path)
-    try:
-        text = file.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise EventError(f"{file}: cannot read the events file: {exc.strerror or exc}") from exc
-    try:
-        node = yaml.compose(text)
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise EventError(f"{file}: not valid YAML: {exc}") from exc
-    lines: list[int] = []
-    if isinstance(node, yaml.SequenceNode):
-        lines = [item.start_mark.line + 1 for item in node.value]
-    return parse_events(data, str(file), lines)
+    data, lines = read_yaml_with_lines(path, "events", EventError)
+    return parse_events(data, str(Path(path)), lines.get("", []))
 
 
 def parse_events(
