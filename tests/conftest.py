@@ -6,6 +6,7 @@ each took in tests/durations.json."""
 from __future__ import annotations
 
 import os
+import shutil
 import signal
 import sys
 from collections.abc import Iterator
@@ -86,3 +87,21 @@ def _planner_workers_stop_with_the_tests() -> Iterator[None]:
     worker = sys.modules.get("plan_bridge.planning.worker")
     if worker is not None:
         worker._close_default_pool()
+
+
+#: The viewer's browser tests: Debian's chromium, headless (as root: no sandbox).
+CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
+CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking"]
+
+
+@pytest.fixture(scope="module")
+def browser() -> Iterator[Any]:
+    """A headless chromium driven by Playwright, one for a test module (skips the test
+    when Playwright or chromium is not installed)."""
+    sync_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
+    if not Path(CHROMIUM).exists():
+        pytest.skip("chromium is not installed")
+    with sync_api.sync_playwright() as p:
+        launched = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        yield launched
+        launched.close()

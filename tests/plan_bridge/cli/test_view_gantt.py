@@ -8,14 +8,12 @@ import importlib.util
 import itertools
 import json
 import os
-import shutil
 import signal
 import subprocess
 import sys
 import threading
 import time
 import urllib.request
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -32,8 +30,6 @@ REPO = Path(__file__).parents[3]
 DOMAINS = REPO / "domains"
 ARTIFACTS = REPO / "artifacts" / "viewer"
 TOOL = REPO / "tools" / "gantt_screenshot.py"
-CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
-ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking"]
 
 
 @pytest.fixture(scope="module")
@@ -58,17 +54,6 @@ def journal(tmp_path_factory: pytest.TempPathFactory) -> Path:
         ]
     )
     return path
-
-
-@pytest.fixture(scope="module")
-def browser() -> Iterator[Any]:
-    sync_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
-    if not Path(CHROMIUM).exists():
-        pytest.skip("chromium is not installed")
-    with sync_api.sync_playwright() as p:
-        b = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
-        yield b
-        b.close()
 
 
 def _rows(page: Any) -> list[dict[str, Any]]:

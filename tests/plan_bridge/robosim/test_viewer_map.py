@@ -11,14 +11,12 @@ from __future__ import annotations
 
 import itertools
 import os
-import shutil
 import signal
 import subprocess
 import sys
 import threading
 import time
 import xml.etree.ElementTree as ET
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -39,8 +37,6 @@ FETCH = ROOT / "domains" / "robosim_fetch"
 CLOSE = FETCH / "events" / "close_hallway.yaml"
 ARTIFACTS = ROOT / "artifacts" / "viewer"
 SVG = "{http://www.w3.org/2000/svg}"
-CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
-ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking"]
 HALL = "hall_kitchen_living_room"
 
 
@@ -165,17 +161,6 @@ def test_pictures_are_drawn_only_when_a_journal_or_a_viewer_watches(tmp_path: Pa
 
 
 # -- in the browser -------------------------------------------------------------------------
-@pytest.fixture(scope="module")
-def browser() -> Iterator[Any]:
-    sync_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
-    if not Path(CHROMIUM).exists():
-        pytest.skip("chromium is not installed")
-    with sync_api.sync_playwright() as p:
-        b = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
-        yield b
-        b.close()
-
-
 def picture_width(page: Any) -> int:
     return int(page.eval_on_selector("#scene-img", "img => img.complete ? img.naturalWidth : 0"))
 
