@@ -1,6 +1,8 @@
 """SMACH skills over pyrobosim's robot API, one per action of the robosim domain.
 
-Every skill is a small StateMachine acting on a :class:`~.world.RobosimWorld`:
+Every skill is a small StateMachine acting on a robot's :class:`~.body.Body` (in a
+:class:`~.world.RobosimWorld` of this process, or of the world's process when the robot
+runs as a process of its own):
 
 * ``navigate``: ``PLAN`` (the map's route over the hallways the robots have not seen
   closed) -> ``DRIVE`` (leg by leg with pyrobosim's path executor: inside rooms, and
@@ -22,10 +24,9 @@ PLANNING_FAILURE, EXECUTION_FAILURE, POSTCONDITION_FAILURE, INVALID_ACTION) ->
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
 
 import smach
-from plan_bridge.robosim.actions import act, cross_path, drive_route, follow, plan_route
+from plan_bridge.robosim.body import Body, WorldBody
 from plan_bridge.robosim.world import ActionResult, RobosimWorld
 from plan_bridge.skills.kit import SKILL_OUTCOMES, skill_machine
 from plan_bridge.skills.registry import OBSERVATIONS_KEY, SkillRegistry
@@ -75,52 +76,46 @@ class _Step(smach.State):
 class _Look(smach.State):
     """Report what the robot sees; the skill's outcome from the action's status."""
 
-    def __init__(self, world: RobosimWorld, robot: Any, about: tuple[str, ...]) -> None:
+    def __init__(self, body: Body, robot: str, about: tuple[str, ...]) -> None:
         super().__init__(
             outcomes=list(SKILL_OUTCOMES), input_keys=_RESULT_KEYS, io_keys=[OBSERVATIONS_KEY]
         )
-        self.world = world
+        self.body = body
         self.robot = robot
         self.about = about
 
     def execute(self, ud: smach.UserData) -> str:
-        ud[OBSERVATIONS_KEY] = dict(self.world.observe(self.robot, self.about))
+        ud[OBSERVATIONS_KEY] = dict(self.body.look(self.robot, self.about))
         outcome = ActionResult(ud.status, ud.message).outcome
         if ud.status != "SUCCESS":
-            smach.logdebug(f"{self.robot.name}: {ud.status}: {ud.message}")
+            smach.logdebug(f"{self.robot}: {ud.status}: {ud.message}")
         if outcome == "preempted" or self.preempt_requested():
             self.service_preempt()
             return "preempted"
         return outcome
 
 
-def skill_for(world: RobosimWorld, action: str, *args: str) -> smach.StateMachine:
-    """The skill machine of one step: ``skill_for(world, "pick", "robot", "apple0", ...)``."""
+def skill_for(world: RobosimWorld | Body, action: str, *args: str) -> smach.StateMachine:
+    """The skill machine of one step: ``skill_for(world, "pick", "robot", "apple0", ...)``
+    (``world``: a :class:`~.world.RobosimWorld`, or the :class:`~.body.Body` to act with)."""
     names = ACTIONS[action]
-    robot = world.robot(args[0])
+    robot = args[0]
+    if isinstance(world, RobosimWorld):
+        world.robot(robot)  # KeyError now for a robot the world does not have
+    body: Body = WorldBody(world) if isinstance(world, RobosimWorld) else world
     sm = skill_machine(bind=dict(zip(names, args, strict=True)))
-    look = _Look(world, robot, tuple(args))
+    look = _Look(body, robot, tuple(args))
     with sm:
         if action in ("navigate", "cross"):
 
             def plan(ud: smach.UserData, preempted: Callable[[], bool]) -> ActionResult:
                 if preempted():
                     return ActionResult("CANCELED", "preempted before planning")
-                if action == "cross":
-                    path, result = cross_path(world, robot, args[3], args[2])
-                    ud.path = path
-                else:
-                    route, result = plan_route(world, robot, args[2])
-                    ud.path = route
+                ud.path, result = body.plan(robot, action, args)
                 return result
 
             def drive(ud: smach.UserData, preempted: Callable[[], bool]) -> ActionResult:
-                if action == "cross":
-                    result = follow(world, robot, ud.path, preempted)
-                    if result.status == "SUCCESS":
-                        world.crossed.setdefault(robot.name, []).append(world.name(args[3]))
-                    return result
-                return drive_route(world, robot, ud.path, preempted)
+                return body.drive(robot, action, args, ud.path, preempted)
 
             smach.StateMachine.add(
                 "PLAN",
@@ -142,7 +137,7 @@ def skill_for(world: RobosimWorld, action: str, *args: str) -> smach.StateMachin
         else:
 
             def work(ud: smach.UserData, preempted: Callable[[], bool]) -> ActionResult:
-                return act(world, robot, action, list(args), preempted)
+                return body.act(robot, action, args, preempted)
 
             smach.StateMachine.add(
                 "ACT", _Step(work, ["done"], lambda r: "done"), transitions={"done": "LOOK"}
@@ -151,13 +146,17 @@ def skill_for(world: RobosimWorld, action: str, *args: str) -> smach.StateMachin
     return sm
 
 
-def robosim_skills(world: RobosimWorld, registry: SkillRegistry | None = None) -> SkillRegistry:
-    """A registry of simulated skills acting on ``world`` for every robosim action."""
+def robosim_skills(
+    world: RobosimWorld, registry: SkillRegistry | None = None, *, body: Body | None = None
+) -> SkillRegistry:
+    """A registry of simulated skills acting on ``world`` for every robosim action
+    (through ``body``: default the world's own robots, :class:`~.body.WorldBody`)."""
     registry = registry or SkillRegistry(simulated=True)
+    acting: Body = body or WorldBody(world)
     for action in ACTIONS:
 
         def factory(*args: str, _action: str = action) -> smach.State:
-            return skill_for(world, _action, *args)
+            return skill_for(acting, _action, *args)
 
         factory.__qualname__ = f"skill_for[{action}]"
         registry.add(action, factory, simulated=True)
