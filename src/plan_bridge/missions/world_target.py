@@ -114,6 +114,12 @@ class WorldTarget(Target):
     def task_view(self) -> RouteTasks | None:
         return self.view
 
+    def robots(self) -> list[str]:
+        """The world's robots, by their lower-case (PDDL) names."""
+        if self.view is not None:
+            return self.view.robots()
+        return sorted(name for name, kind in self.task.objects.items() if kind == "bot")
+
     def planner_for(self, inner: Planner) -> Planner:
         """A fleet planner over ``inner`` (with one robot it plans as ``inner``)."""
         return inner if self.view is None else FleetPlanner(inner, self.view)

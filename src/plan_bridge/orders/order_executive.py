@@ -127,6 +127,10 @@ class OrderExecutive(Executive):
         self.benched: dict[str, float] = {}
         """Robots left out of plans (the planner is told nothing of them) until a time
         of the mission's clock: their step failed past recovery."""
+        self.robots_gone: Callable[[], Collection[str]] | None = None
+        """The robots that are gone now (a robot node whose process died: ``plan-bridge
+        run --ros``), left out of plans while they are gone; None: every robot stays."""
+        self._announced_gone: frozenset[str] = frozenset()
         orders.add_waker(self._wake)
         orders.add_listener(self._order_changed)
         self.hold.alarm = self._alarm
@@ -462,10 +466,14 @@ class OrderExecutive(Executive):
         self.busy_s = {str(r): float(t) for r, t in mission.get("busy_s", {}).items()}
 
     # -- robots left out ----------------------------------------------------------------------
+    def _gone(self) -> frozenset[str]:
+        return frozenset(self.robots_gone()) if self.robots_gone is not None else frozenset()
+
     def _bench(self, robots: Sequence[str]) -> None:
         """Leave ``robots`` out of plans for :data:`BENCH_S` (unless no robot would be left)."""
         now = self.now()
-        available = {r for r in self.robots if self.benched.get(r, -1.0) <= now}
+        gone = self._gone()
+        available = {r for r in self.robots if self.benched.get(r, -1.0) <= now and r not in gone}
         robots = [r for r in robots if r in available]
         if not robots or available <= set(robots):
             return
@@ -478,9 +486,18 @@ class OrderExecutive(Executive):
         )
 
     def _without_benched(self, facts: FactSnapshot) -> FactSnapshot:
-        """``facts`` without those of the robots benched now."""
+        """``facts`` without those of the robots benched or gone now."""
         now = self.now()
         out = {r for r, until in self.benched.items() if until > now}
+        gone = self._gone()
+        if gone - self._announced_gone:
+            self.decide(
+                "gone",
+                f"{', '.join(sorted(gone - self._announced_gone))} gone (its robot node is "
+                f"not there): left out of plans, the other robots take its orders",
+            )
+        self._announced_gone = gone
+        out |= gone
         if not out:
             return facts
         kept = [f for f in facts if not any(arg in out for arg in f[1:])]

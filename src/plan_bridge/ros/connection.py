@@ -92,8 +92,10 @@ class RobotConnection:
         server_wait_timeout: float = 10.0,
         log: TextIO | None = None,
         echo_robot: bool = True,
+        robot_nodes: bool = False,
     ) -> None:
         self.target = target
+        self.robot_nodes = robot_nodes
         self.echo_robot = echo_robot
         self.start_robot = start_robot
         self.prefix = prefix or (f"robot_{os.getpid()}" if start_robot else "robot")
@@ -115,6 +117,12 @@ class RobotConnection:
         self._order_services: list[OrderServices] = []
         #: When the robot's heartbeat was last heard (None: not yet).
         self._last_beat: float | None = None
+        #: With ``robot_nodes``: each robot's own node (process), by robot name.
+        self.members: dict[str, RobotConnection] = {}
+        #: The world's connection, for the node of one of its robots (``robot_name``).
+        self._parent: RobotConnection | None = None
+        self.robot_name: str | None = None
+        self._command: list[str] = []
 
     # -- life cycle -------------------------------------------------------------------
     def open(self) -> RobotConnection:
@@ -135,18 +143,37 @@ class RobotConnection:
             f"discovery {os.environ.get('ROS_AUTOMATIC_DISCOVERY_RANGE', 'SUBNET (default)')}"
         )
         if self.start_robot:
-            self._say(f"ros: starting a robot node under /{self.prefix} ({where})")
-            self._spawn()
+            self._say(f"ros: starting a {self._kind} under /{self.prefix} ({where})")
+            self._start_process()
+            self._wait_ready()
         else:
-            self._say(f"ros: connecting to the running robot node under /{self.prefix} ({where})")
+            self._say(f"ros: connecting to the running {self._kind} under /{self.prefix} ({where})")
+        self._join_graph()
+        self._check_info()
+        if self.robot_nodes and self.robot_info.get("robots") and self._parent is None:
+            self._open_members(list(self.robot_info["robots"]))
+
+    @property
+    def _kind(self) -> str:
+        if self._parent is not None:
+            return f"robot node of {self.robot_name}"
+        return "world node" if self.robot_nodes else "robot node"
+
+    def _join_graph(self) -> None:
         from smach.ros.rclpy_api import rclpy
 
-        self.context = rclpy.Context()
-        rclpy.init(context=self.context)
-        self.node = rclpy.create_node(
-            f"plan_bridge_executive_{os.getpid()}_{next(_nodes)}", context=self.context
-        )
+        if self._parent is not None:  # a robot of the world: the world's node listens
+            self.node = self._parent.node
+        else:
+            self.context = rclpy.Context()
+            rclpy.init(context=self.context)
+            self.node = rclpy.create_node(
+                f"plan_bridge_executive_{os.getpid()}_{next(_nodes)}", context=self.context
+            )
         self._listen_to_heartbeat()
+
+    def _check_info(self) -> None:
+        """Read the node's ``info``: it answers, and runs the executive's problem."""
         try:
             self.robot_info = remote_info(self.node, prefix=self.prefix, timeout=self.wait_timeout)
         except RuntimeError as exc:
@@ -155,30 +182,63 @@ class RobotConnection:
                 if self.start_robot
                 else " (start one with: python -m plan_bridge.ros.skill_server "
                 f"{shlex.join(self._target_arguments())} "
-                f"--prefix {self.prefix}; same ROS_DOMAIN_ID on both sides)"
+                f"--prefix {self._world_prefix}"
+                + (f" --robot {self.robot_name}" if self.robot_name else "")
+                + "; same ROS_DOMAIN_ID on both sides)"
             )
-            raise RobotError(f"no robot node answers under /{self.prefix}: {exc}{hint}") from None
+            raise RobotError(f"no {self._kind} answers under /{self.prefix}: {exc}{hint}") from None
         info = self.robot_info
         if info.get("digest") != task_digest(self.target.task):
             raise RobotError(
-                f"the robot node under /{self.prefix} runs {info.get('target')} "
+                f"the {self._kind} under /{self.prefix} runs {info.get('target')} "
                 f"{info.get('problem')} ({info.get('task')}), not {self.target.name} "
                 f"{self.target.problem_path.name}: start it with the same domain and problem"
             )
         if info.get("actions_run") or info.get("busy"):
             self._say(
-                f"ros: warning: the robot node has already run {info.get('actions_run')} actions "
+                f"ros: warning: the {self._kind} has already run {info.get('actions_run')} actions "
                 f"(busy: {', '.join(info.get('busy') or []) or 'no'}); its world is no longer the "
                 f"problem's initial state, which the plan assumes: restart it for a new mission"
             )
         how = f"started here, pid {info.get('pid')}" if self.start_robot else "already running"
         goal = f" goal {info['goal']}" if info.get("goal") else ""
         self._say(
-            f"ros: robot node {info.get('node')} ({how}) serves {info.get('target')} "
+            f"ros: {self._kind} {info.get('node')} ({how}) serves {info.get('target')} "
             f"{info.get('problem')}{goal} under /{self.prefix}: {info.get('mode')}, seed "
             f"{info.get('seed')}, fail rate {info.get('fail_rate')}"
             + (f", time scale {info['time_scale']}" if info.get("time_scale") is not None else "")
         )
+
+    def _open_members(self, robots: Sequence[str]) -> None:
+        """A node of each robot of the world, under ``PREFIX/ROBOT``: started side by side
+        (each loads the world), then checked one by one."""
+        for name in robots:
+            member = RobotConnection(
+                self.target,
+                prefix=f"{self.prefix}/{name}",
+                start_robot=self.start_robot,
+                seed=self.seed,
+                fail_rate=self.fail_rate,
+                time_scale=self.time_scale,
+                wait_timeout=self.wait_timeout,
+                server_wait_timeout=self.server_wait_timeout,
+                log=self.log,
+                echo_robot=self.echo_robot,
+            )
+            member._parent = self
+            member.robot_name = name
+            self.members[name] = member
+            if self.start_robot:
+                member._start_process()
+        for member in self.members.values():
+            if self.start_robot:
+                member._wait_ready()
+            member._join_graph()
+            member._check_info()
+
+    @property
+    def _world_prefix(self) -> str:
+        return self._parent.prefix if self._parent is not None else self.prefix
 
     def _listen_to_heartbeat(self) -> None:
         """Hear the robot's heartbeat (protocol.HEARTBEAT_TOPIC) on smach's helper node,
@@ -227,7 +287,7 @@ class RobotConnection:
             arguments += ["--events", self.events]
         return arguments
 
-    def _spawn(self) -> None:
+    def _start_process(self) -> None:
         command = [
             sys.executable,
             "-m",
@@ -236,30 +296,37 @@ class RobotConnection:
             "--seed",
             str(self.seed),
             "--prefix",
-            self.prefix,
+            self._world_prefix,
             "--node-name",
-            f"robot_{os.getpid()}",
+            f"robot_{os.getpid()}" + (f"_{self.robot_name}" if self.robot_name else ""),
             "--time-scale",
             str(self.time_scale),
             "--exit-with-parent",
         ]
+        if self.robot_name is not None:
+            command += ["--robot", self.robot_name]
         if self.fail_rate is not None:
             command += ["--fail-rate", str(self.fail_rate)]
+        self._command = command
         # stderr is inherited: the robot's errors appear as they happen.
         self.process = subprocess.Popen(
             command, stdout=subprocess.PIPE, text=True, stdin=subprocess.DEVNULL
         )
         self._pump_thread = threading.Thread(target=self._pump, name="robot-output", daemon=True)
         self._pump_thread.start()
+
+    def _wait_ready(self) -> None:
+        process = self.process
+        assert process is not None
         deadline = time.monotonic() + self.START_TIMEOUT
         while not self._ready.wait(0.05):
-            if self.process.poll() is not None:
+            if process.poll() is not None:
                 raise RobotError(
-                    f"the robot node exited with code {self.process.returncode} before it was "
-                    f"ready: {' '.join(command[1:])}"
+                    f"the {self._kind} exited with code {process.returncode} before it was "
+                    f"ready: {' '.join(self._command[1:])}"
                 )
             if time.monotonic() > deadline:
-                raise RobotError(f"the robot node was not ready within {self.START_TIMEOUT:g} s")
+                raise RobotError(f"the {self._kind} was not ready within {self.START_TIMEOUT:g} s")
 
     def _pump(self) -> None:
         process = self.process
@@ -270,10 +337,16 @@ class RobotConnection:
             if line == "ready":
                 self._ready.set()
             elif self.echo_robot:
-                self._say(f"  [robot] {line}")
+                self._say(f"  [{self._label}] {line}")
         code = process.wait()
-        if self.context is not None:  # not stopped by close()
-            self._say(f"ros: the robot node exited (code {code})")
+        if self.node is not None:  # not stopped by close()
+            self._say(f"ros: the {self._kind} exited (code {code})")
+
+    @property
+    def _label(self) -> str:
+        if self.robot_name is not None:
+            return self.robot_name
+        return "world" if self.robot_nodes else "robot"
 
     def _say(self, line: str) -> None:
         if self.log is not None:
@@ -293,19 +366,23 @@ class RobotConnection:
         graph (a crashed process leaves it when its DDS lease expires: 2 s for
         ``skill_server``'s default ``--lease``).
         """
+        if self._parent is not None:
+            world_gone = self._parent.lost()
+            if world_gone is not None:
+                return world_gone
         if self.process is not None and self.process.poll() is not None:
-            return f"the robot node exited (code {self.process.returncode})"
+            return f"the {self._kind} exited (code {self.process.returncode})"
         if self.node is None:
             return "not connected"
         last = self._last_beat
         if last is not None and time.monotonic() - last > HEARTBEAT_TIMEOUT:
             return (
-                f"the robot node under /{self.prefix} sent no heartbeat for "
+                f"the {self._kind} under /{self.prefix} sent no heartbeat for "
                 f"{time.monotonic() - last:.1f} s"
             )
         wanted = f"/{self.prefix}/info"
         if not any(name == wanted for name, _ in self.node.get_service_names_and_types()):
-            return f"the robot node under /{self.prefix} left the ROS graph"
+            return f"the {self._kind} under /{self.prefix} left the ROS graph"
         return None
 
     def skills(self) -> SkillRegistry:
@@ -327,13 +404,22 @@ class RobotConnection:
         )
         remote = registry.fallback
         assert remote is not None
+        # With a node per robot, a step runs on the node of its robot (its first argument).
+        members = {name: member.skills().fallback for name, member in self.members.items()}
 
         def skill(step: PlanStep) -> smach.State:
             reason = self.lost()
-            return remote(step) if reason is None else RobotLost(step, reason)
+            if reason is not None:
+                return RobotLost(step, reason)
+            own = members.get(step.arguments[0]) if step.arguments else None
+            return own(step) if own is not None else remote(step)
 
         registry.fallback = skill
         return registry
+
+    def robots_gone(self) -> set[str]:
+        """The robots whose own node is gone (:meth:`lost`): none without ``robot_nodes``."""
+        return {name for name, member in self.members.items() if member.lost() is not None}
 
     def world(self) -> RobotWorld:
         """The robot's world as the executive sees it (a :class:`World`)."""
@@ -377,7 +463,11 @@ class RobotConnection:
         return services
 
     def close(self) -> None:
-        """Leave the ROS graph; stop the robot process if we started it."""
+        """Leave the ROS graph; stop the robot processes we started."""
+        for member in self.members.values():
+            member.close()
+        if self._parent is not None:
+            self.node = None  # the world's node: it goes with the world's connection
         for services in self._knowledge_services:
             services.close()
         self._knowledge_services = []

@@ -92,6 +92,12 @@ def _parser() -> argparse.ArgumentParser:
         "--action-time", type=float, default=0.2, help="seconds per symbolic action"
     )
     parser.add_argument("--prefix", default="skills", help="action names: PREFIX/ACTION")
+    parser.add_argument(
+        "--robot",
+        metavar="NAME",
+        help="pyrobosim world: be robot NAME's node only: run its skills here, under "
+        "PREFIX/NAME, acting through the world node under PREFIX (started without --robot)",
+    )
     parser.add_argument("--node-name", default="skill_server")
     parser.add_argument(
         "--lease",
@@ -130,6 +136,18 @@ def _load(args: argparse.Namespace) -> _Robot:
         args.target, args.problem or args.problem_file, goal=args.goal, events=args.events
     )
     robosim = isinstance(target, WorldTarget)
+    if args.robot is not None:
+        robots = target.robots() if isinstance(target, WorldTarget) else []
+        if args.robot.lower() not in robots:
+            raise PlanBridgeError(
+                f"--robot {args.robot}: "
+                + (
+                    f"no such robot in {target.name}; robots: {', '.join(robots)}"
+                    if robosim
+                    else "a robot of its own process is for pyrobosim worlds only"
+                )
+            )
+        args.robot = args.robot.lower()
     symbolic = not target.has_own_skills
     fail_rate = args.fail_rate if args.fail_rate is not None else (0.0 if symbolic else 0.1)
     setup = target.setup(seed=args.seed, fail_rate=fail_rate)
@@ -154,6 +172,8 @@ def _load(args: argparse.Namespace) -> _Robot:
 
 def _meta(args: argparse.Namespace, robot: _Robot) -> dict[str, Any]:
     """What the robot's ``info`` service tells about its run."""
+    from plan_bridge.missions.world_target import WorldTarget
+
     target = robot.target
     meta: dict[str, Any] = {
         "target": target.name,
@@ -164,7 +184,14 @@ def _meta(args: argparse.Namespace, robot: _Robot) -> dict[str, Any]:
         "action_time": args.action_time if robot.symbolic else None,
     }
     if robot.robosim:
-        meta.update(goal=target.goal_text, goal_name=target.goal_name, events=args.events)
+        assert isinstance(target, WorldTarget)
+        meta.update(
+            goal=target.goal_text,
+            goal_name=target.goal_name,
+            events=args.events,
+            robots=target.robots(),
+            robot=args.robot,
+        )
     return meta
 
 
@@ -205,17 +232,33 @@ def _serve(args: argparse.Namespace, robot: _Robot, make_server: ServerFactory) 
     def say(line: str) -> None:
         print(line, flush=True)
 
+    skills = None if robot.symbolic else robot.setup.skills
+    prefix = args.prefix.rstrip("/")
+    bodies: Any = None
+    if args.robot is not None:
+        # One robot's node: its skill machines run here, its body is the world node's.
+        from plan_bridge.robosim.skills import robosim_skills
+        from plan_bridge.ros.body_link import RemoteBody
+
+        skills = robosim_skills(robot.world, body=RemoteBody(node, prefix))
+        prefix = f"{prefix}/{args.robot}"
+    elif robot.robosim:
+        # The world node: it serves its robots' bodies to robot nodes of their own.
+        from plan_bridge.ros.body_link import BodyServer
+
+        bodies = BodyServer(node, robot.world, prefix=prefix, log=say)
     server = make_server(
         node,
         robot.world,
         task=robot.target.task if robot.robosim else None,
-        prefix=args.prefix,
+        prefix=prefix,
         action_time=args.action_time,
         log=say,
-        skills=None if robot.symbolic else robot.setup.skills,
+        skills=skills,
         pacer=robot.pacer,
-        concurrent=bool(robot.setup.concurrent) and not robot.symbolic,
+        concurrent=bool(robot.setup.concurrent) and not robot.symbolic and args.robot is None,
         meta=_meta(args, robot),
+        robot=args.robot,
     )
     executor = MultiThreadedExecutor(num_threads=4)
     executor.add_node(node)
@@ -231,12 +274,15 @@ def _serve(args: argparse.Namespace, robot: _Robot, make_server: ServerFactory) 
                 break
     except ExternalShutdownException:
         pass
-    say(f"faults {robot.world.faults_injected}")
+    if args.robot is None:  # a robot's own node has no world: the world node counts
+        say(f"faults {robot.world.faults_injected}")
     # Halt the skills, let the callbacks still running end (nothing spins any more),
     # then destroy: a service or action destroyed under its callback fails it.
     server.halt_all()
     wait_for_callbacks(executor, 5.0)
     executor.shutdown(timeout_sec=0)
     server.destroy()
+    if bodies is not None:
+        bodies.destroy()
     node.destroy_node()
     rclpy.try_shutdown()

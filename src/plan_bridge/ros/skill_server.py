@@ -128,6 +128,7 @@ class SkillServer:
         pacer: Pacer | None = None,
         concurrent: bool = False,
         meta: Mapping[str, Any] | None = None,
+        robot: str | None = None,
     ) -> None:
         fibonacci, basic_types, trigger = interfaces()
         self._fibonacci = fibonacci
@@ -152,6 +153,9 @@ class SkillServer:
         self.pacer = pacer
         self.concurrent = concurrent
         self.meta = dict(meta or {})
+        #: The one robot this node is (its skills act through the world node's body,
+        #: its ``world`` is only a copy for names): None for a node with the world.
+        self.robot = robot
         self._log = log or (lambda line: None)
         self._group = ReentrantCallbackGroup()
         # One robot: actions run one at a time (unless the domain runs several robots).
@@ -207,6 +211,8 @@ class SkillServer:
     def mode(self) -> str:
         if self.skills is None:
             return "symbolic"
+        if self.robot is not None:
+            return f"pyrobosim skills of {self.robot}"
         return "domain skills" if isinstance(self.world, SimulatedWorld) else "pyrobosim skills"
 
     def info(self) -> dict[str, Any]:
@@ -215,7 +221,7 @@ class SkillServer:
             busy = sorted(str(step) for _, _, step in self._runs.values())
         world = self.world
         faults = list(world.faults) if isinstance(world, SimulatedWorld) else []
-        return {
+        own = {
             **self.meta,
             "node": self.node.get_fully_qualified_name(),
             "prefix": self.prefix,
@@ -225,6 +231,11 @@ class SkillServer:
             "digest": task_digest(self.task),
             "concurrent": self.concurrent,
             "busy": busy,
+        }
+        if self.robot is not None:  # the world and its numbers are the world node's
+            return own
+        return {
+            **own,
             "sim_time": round(world.now(), 3),
             "actions_run": world.actions_run,
             "faults_injected": int(world.faults_injected),
@@ -236,7 +247,10 @@ class SkillServer:
         }
 
     def facts(self) -> list[str]:
-        """The facts true in the robot's world, as PDDL text (the ``facts`` service)."""
+        """The facts true in the robot's world, as PDDL text (the ``facts`` service);
+        ValueError on a node of one robot (the world node has them)."""
+        if self.robot is not None:
+            raise ValueError(f"{self.robot}'s node has no world: ask the world node's facts")
         world = self.world
         if isinstance(world, SimulatedWorld):
             return sorted(" ".join(f) for f in world.facts)
@@ -264,6 +278,8 @@ class SkillServer:
         unknown = [a for a in args if a not in self._objects]
         if unknown:
             raise ValueError(f"unknown objects {unknown}")
+        if self.robot is not None and args[:1] != (self.robot,):
+            raise ValueError(f"this is {self.robot}'s node: {text} is not its step")
         return PlanStep(action, args)
 
     def _ticket(self, ticket: int) -> PlanStep | None:
@@ -362,8 +378,11 @@ class SkillServer:
         return world.perform(step)
 
     def _on_facts(self, request: Any, response: Any) -> Any:
-        response.success = True
-        response.message = json.dumps(self.facts())
+        try:
+            response.message = json.dumps(self.facts())
+            response.success = True
+        except ValueError as exc:
+            response.success, response.message = False, str(exc)
         return response
 
     def _on_info(self, request: Any, response: Any) -> Any:

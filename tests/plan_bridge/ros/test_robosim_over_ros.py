@@ -158,11 +158,14 @@ def test_plan_bridge_run_ros_reaches_the_goal_as_in_one_process_events_on_the_ro
     assert local.returncode == 0, local.stderr
     ros, alone = json.loads(across.stdout), json.loads(local.stdout)
     assert ros["goal_reached"] and ros["ros"]["robot"] == "started"
-    # The events happened in the robot's world, which the executive learnt of through
+    # The world runs in a world node, the robot's skills in a node of their own.
+    assert "ros: robot node of robot " in across.stderr
+    assert "  [robot]   state /navigate/DRIVE" in across.stderr
+    # The events happened in the world node, which the executive learnt of through
     # the skills' observations: it replanned through the office.
     # (At 22 s, or once the robot left the hallway: pyrobosim closes none with a robot in it.)
     assert re.search(
-        r"  \[robot\] world 22\.\d\d s: hall_kitchen_living_room closed", across.stderr
+        r"  \[world\] world 22\.\d\d s: hall_kitchen_living_room closed", across.stderr
     )
     assert ros["world_changes"] == 2 and ros["replans"] >= 1
     # The same run as in one process: steps, faults, distance and battery (the

@@ -1,0 +1,125 @@
+"""A fleet over ROS 2: the world in one process, each robot in its own; a robot's process
+killed, its orders go to the others (``plan-bridge run --ros`` on robosim_hospital)."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+from waiting import wait_until
+
+pytest.importorskip("smach.ros.rclpy_api", reason="needs rclpy (the ros extra)")
+pytest.importorskip("pyrobosim", reason="pyrobosim is not installed (the sim extra)")
+
+pytestmark = pytest.mark.ros
+
+ROOT = Path(__file__).resolve().parents[3]
+HOSPITAL = ROOT / "domains" / "robosim_hospital"
+ORDERS = """\
+orders:
+  - {id: meds-a1, at: 0, goal: meds_to_a1}
+  - {id: sample-b, at: 0, goal: sample_b_to_lab}
+  - {id: linen-a2, at: 1, goal: linen_to_a2}
+  - {id: meds-b2, at: 2, goal: meds_to_b2}
+"""
+
+
+def order_events(journal: Path) -> list[dict[str, object]]:
+    if not journal.exists():
+        return []
+    events = []
+    for line in journal.read_text().splitlines():
+        try:
+            record = json.loads(line)
+        except ValueError:
+            continue  # the line being written
+        if record.get("kind") == "order":
+            events.append(record)
+    return events
+
+
+@pytest.mark.timeout(300)
+def test_killing_a_robots_node_moves_its_orders_to_the_other_robots(tmp_path: Path) -> None:
+    orders, journal = tmp_path / "orders.yaml", tmp_path / "run.jsonl"
+    orders.write_text(ORDERS)
+    command = [
+        sys.executable, "-m", "plan_bridge", "run", str(HOSPITAL), "--ros", "-v",
+        "--orders", str(orders), "--seed", "2", "--fail-rate", "0", "--time-scale", "0.05",
+        "--journal", str(journal), "--json",
+    ]  # fmt: skip
+    process = subprocess.Popen(
+        command, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    lines: list[str] = []
+    reader = threading.Thread(
+        target=lambda: lines.extend(line.rstrip("\n") for line in process.stderr or ()),
+        daemon=True,
+    )
+    reader.start()
+    try:
+        # Each robot's node is a process of its own, beside the world's.
+        pids: dict[str, int] = {}
+
+        def started() -> bool:
+            for line in list(lines):
+                found = re.match(r"ros: robot node of (\w+) .*\(started here, pid (\d+)\)", line)
+                if found:
+                    pids[found[1]] = int(found[2])
+            return len(pids) == 3
+
+        assert wait_until(started, 120), "\n".join(lines)
+        assert sorted(pids) == ["nova", "orla", "pim"] and len(set(pids.values())) == 3
+
+        # The first robot that drives for an order is killed mid-drive (SIGKILL).
+        def driving() -> str | None:
+            for line in list(lines):
+                found = re.match(r"  \[(\w+)\]   state /navigate/DRIVE", line)
+                if found:
+                    return found[1]
+            return None
+
+        assert wait_until(lambda: driving() is not None, 120), "\n".join(lines)
+        victim = driving()
+        assert victim is not None
+        os.kill(pids[victim], signal.SIGKILL)
+        killed_at = time.monotonic()
+        theirs = {str(e["order"]) for e in order_events(journal) if victim in (e["robots"] or [])}
+        stdout, _ = process.communicate(timeout=200)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.communicate()
+    reader.join(5)
+    text = "\n".join(lines)
+    assert "Traceback" not in text
+    report = json.loads(stdout)
+    counts = report["orders"]
+    # Every order is accounted for: done, or failed with its reason (none lost).
+    assert counts["done"] + counts["failed"] + counts["refused"] == counts["orders"] == 4
+    gone = [d for d in report["decisions"] if d["decision"] == "gone"]
+    assert gone and victim in gone[0]["reason"], report["decisions"]
+    # The victim's orders were taken over: done by the others, none by the victim.
+    final = {str(e["order"]): e for e in order_events(journal) if e["status"] in ("done", "failed")}
+    assert theirs, "the killed robot had no order"
+    moved = [o for o in theirs if final[o]["status"] == "done"]
+    assert moved, {o: final[o] for o in theirs}
+    for order in moved:
+        assert victim not in (final[order]["robots"] or []), final[order]
+    for order in theirs - set(moved):
+        assert final[order]["reason"], final[order]
+    took = [e for e in order_events(journal) if e["order"] in moved and e["status"] == "assigned"][
+        -1
+    ]
+    print(
+        f"\n{victim} killed; its orders {sorted(theirs)} went to {took['robots']}; "
+        f"run ended {time.monotonic() - killed_at:.1f} s after the kill: {counts}"
+    )
