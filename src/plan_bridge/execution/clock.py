@@ -9,6 +9,9 @@ and order nothing.
 
 :class:`WallClock` is real time: ``time.monotonic`` and real waits.
 
+:class:`PacedClock` is the simulated time of a world in another process that paces
+itself at a known rate (a robot node's ``--time-scale``): wall time scaled, real waits.
+
 :class:`SimClock` is a simulated world's clock: time moves only when the world says so,
 and a run on it is a function of its seed whatever the threads do. Its participants (the
 threads admitted to it) take **turns**: exactly one of them runs at a time, and when it
@@ -50,6 +53,7 @@ __all__ = [
     "Clock",
     "ClockCondition",
     "HasClock",
+    "PacedClock",
     "SimClock",
     "Ticket",
     "WallClock",
@@ -160,6 +164,52 @@ class WallClock:
 
 #: The wall clock (it has no state: one is enough).
 WALL_CLOCK = WallClock()
+
+
+class _PacedCondition(ClockCondition):
+    def __init__(self, clock: PacedClock) -> None:
+        super().__init__()
+        self._clock = clock
+
+    def wait_until(self, deadline: float | None) -> None:
+        self.wait(None if deadline is None else max(0.0, self._clock.wall_left(deadline)))
+
+
+class PacedClock:
+    """Simulated seconds of a world that paces itself in another process: ``time_scale``
+    wall seconds per simulated second, counted from when the clock was made (a robot
+    node of ``plan-bridge run --ros`` runs its world at that pace). Waits are real waits
+    of the paced wall time; nothing is ordered (threads run as on the wall clock)."""
+
+    simulated = True
+
+    def __init__(self, time_scale: float) -> None:
+        if time_scale <= 0:
+            raise ValueError(f"a paced clock needs a time_scale above 0, got {time_scale!r}")
+        self.time_scale = float(time_scale)
+        self._origin = time.monotonic()
+
+    def now(self) -> float:
+        return (time.monotonic() - self._origin) / self.time_scale
+
+    def wall_left(self, when: float) -> float:
+        """Wall seconds until the clock reads ``when``."""
+        return self._origin + when * self.time_scale - time.monotonic()
+
+    def sleep_until(self, when: float, interrupted: Interrupted | None = None) -> bool:
+        return WALL_CLOCK.sleep_until(time.monotonic() + self.wall_left(when), interrupted)
+
+    def condition(self) -> ClockCondition:
+        return _PacedCondition(self)
+
+    def admit(self, key: int) -> Ticket:
+        return Ticket(key, 0)
+
+    def turn(self, ticket: Ticket) -> AbstractContextManager[None]:
+        return contextlib.nullcontext()
+
+    def discard(self, ticket: Ticket) -> None:
+        pass
 
 
 class HasClock(Protocol):

@@ -28,10 +28,11 @@ time; if its remaining path is blocked the drive fails there).
 
 from __future__ import annotations
 
+import contextlib
 import math
 import threading
 import time
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -122,6 +123,7 @@ class RobosimWorld:
         self.clock = SimClock()
         self._time_scale = 0.0
         self._lock = threading.RLock()
+        self._timeline = threading.local()
         self._names = {name.lower(): name for name in self.model.names}
         self.robots: dict[str, Any] = {robot.name.lower(): robot for robot in self.sim.robots}
         self.actions_run = 0
@@ -194,13 +196,32 @@ class RobosimWorld:
         return float(self.clock.now())
 
     def elapse(self, seconds: float) -> None:
-        """The calling thread's action took ``seconds`` of simulated time."""
+        """The calling thread's action took ``seconds`` of simulated time. Within
+        :meth:`own_timeline`, the thread's actions follow one another from when it
+        began, and the clock is at least at the end of the latest."""
         if seconds <= 0:
             return
         if self.clock.taking_part():
             self.clock.sleep(seconds)
-        else:
+            return
+        at = getattr(self._timeline, "at", None)
+        if at is None:
             self.clock.advance(seconds)
+            return
+        self._timeline.at = at + seconds
+        with self._lock:
+            self.clock.advance(self._timeline.at - self.clock.now())
+
+    @contextlib.contextmanager
+    def own_timeline(self) -> Iterator[None]:
+        """Run the calling thread's actions on a timeline of their own, from now: robots
+        acting at once from threads that do not take turns on the clock (a world node
+        serving robot nodes) overlap in time instead of adding up."""
+        self._timeline.at = self.now()
+        try:
+            yield
+        finally:
+            self._timeline.at = None
 
     def next_event_time(self) -> float | None:
         with self._lock:

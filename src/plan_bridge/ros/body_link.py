@@ -172,7 +172,9 @@ class BodyServer:
             return
         changes = len(self.world.changes)
         try:
-            self._perform(call, op, robot, action, args, route)
+            # Robots act at once here: each call spends time on its own timeline.
+            with self.world.own_timeline():
+                self._perform(call, op, robot, action, args, route)
         except Exception as exc:  # the robot hears of it as the call's failure
             call.finish(ActionResult("EXECUTION_FAILURE", f"{type(exc).__name__}: {exc}"))
         for change in self.world.changes[changes:]:

@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any, TextIO
 import smach
 from plan_bridge.belief import Observation
 from plan_bridge.errors import PlanBridgeError
-from plan_bridge.execution.clock import WALL_CLOCK, Clock
+from plan_bridge.execution.clock import WALL_CLOCK, Clock, PacedClock
 from plan_bridge.planning.types import PlanStep
 from plan_bridge.ros.protocol import HEARTBEAT_TIMEOUT, HEARTBEAT_TOPIC, task_digest
 from plan_bridge.ros.skills import remote_info, ros_skills
@@ -511,8 +511,9 @@ class RobotWorld:
     """The world of a robot node, seen from the executive (a
     :class:`~plan_bridge.execution.world.World`).
 
-    The robot's skills act on it over ROS 2; the executive keeps the wall clock and
-    learns the robot's numbers (faults, simulated time) from its ``info`` service.
+    The robot's skills act on it over ROS 2; the executive keeps the robot's pace (its
+    :attr:`clock`) and learns the robot's numbers (faults, simulated time) from its
+    ``info`` service.
     It cannot be saved (a run with ``--ros`` is not resumable): its state lives in the
     robot's process.
     """
@@ -521,15 +522,22 @@ class RobotWorld:
 
     def __init__(self, robot: RobotConnection) -> None:
         self.robot = robot
-        self._origin = WALL_CLOCK.now()
         self._info: dict[str, Any] = {}
+        # The robot paces its world at its time scale: simulated seconds are wall
+        # seconds divided by it (a robot that does not pace, on the wall clock).
+        scale = robot.robot_info.get("time_scale")
+        paced = isinstance(scale, (int, float)) and scale > 0
+        self._clock: Clock = PacedClock(float(scale or 0)) if paced else WALL_CLOCK
+        self._origin = self._clock.now()
 
     @property
     def clock(self) -> Clock:
-        return WALL_CLOCK
+        """The mission's clock: :class:`~plan_bridge.execution.clock.PacedClock` at the
+        robot's time scale (its simulated seconds as they pass), else the wall clock."""
+        return self._clock
 
     def now(self) -> float:
-        return WALL_CLOCK.now() - self._origin
+        return self._clock.now() - self._origin
 
     def adopt(self, step: PlanStep, observations: Sequence[Observation]) -> None:
         """Nothing to take: the robot's world changed by itself. (A user's skill run in

@@ -13,7 +13,7 @@ import pytest
 from thread_load import busy_thread
 
 from plan_bridge.execution import clock as clock_module
-from plan_bridge.execution.clock import WALL_CLOCK, SimClock, WallClock, clock_of
+from plan_bridge.execution.clock import WALL_CLOCK, PacedClock, SimClock, WallClock, clock_of
 from plan_bridge.execution.simulation import SimulatedWorld
 from plan_bridge.pddl.task import load_task
 
@@ -51,6 +51,22 @@ def test_the_wall_clock_reads_monotonic_time_and_a_preempted_wait_returns_false(
     ticket = clock.admit(0)
     with clock.turn(ticket):  # orders nothing
         pass
+
+
+def test_a_paced_clock_reads_wall_time_divided_by_its_scale_and_waits_the_paced_time() -> None:
+    clock = PacedClock(0.01)  # 100 simulated seconds per wall second
+    assert clock.simulated and clock.now() < 5.0
+    began = time.monotonic()
+    assert clock.sleep_until(clock.now() + 20.0)  # 20 simulated seconds: 0.2 s of wall time
+    assert time.monotonic() - began >= 0.19
+    assert not clock.sleep_until(clock.now() + 3600, lambda: True)  # preempted: at once
+    condition = clock.condition()
+    began = time.monotonic()
+    with condition:
+        condition.wait_until(clock.now() + 10.0)  # not notified: until 0.1 s of wall time
+    assert time.monotonic() - began >= 0.09
+    with pytest.raises(ValueError, match="above 0"):
+        PacedClock(0)
 
 
 def test_a_simulated_world_owns_a_simulated_clock_and_no_world_means_the_wall_clock() -> None:

@@ -184,6 +184,34 @@ def test_an_event_due_during_a_drive_happens_during_it(test_world_file: Path) ->
     assert world.truth(("at", "banana0", "counter0_left"))
 
 
+def test_robots_acting_at_once_on_timelines_of_their_own_overlap_in_time(
+    test_world_file: Path,
+) -> None:
+    """A world node runs robot nodes' calls in threads of their own: their durations
+    overlap on the world's clock instead of adding up."""
+    world = RobosimWorld(test_world_file, seed=0)
+    started = threading.Barrier(2)
+
+    def act(seconds: float) -> None:
+        with world.own_timeline():
+            started.wait(5)
+            world.elapse(seconds)
+
+    threads = [threading.Thread(target=act, args=(s,)) for s in (10.0, 8.0)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join(10)
+    assert world.now() == pytest.approx(10.0)
+    with world.own_timeline():  # one thread alone: its actions follow one another
+        world.elapse(2.0)
+        world.elapse(3.0)
+    assert world.now() == pytest.approx(15.0)
+    world.elapse(1.0)  # outside a timeline: the clock moves on by the duration
+    assert world.now() == pytest.approx(16.0)
+    world.close()
+
+
 def test_adopt_makes_the_world_agree_with_a_users_skill(test_world_file: Path) -> None:
     world = RobosimWorld(test_world_file)
     world.adopt(PlanStep("navigate", ("robot", "kitchen", "table0_tabletop")), [])
