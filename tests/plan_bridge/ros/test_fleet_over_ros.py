@@ -1,5 +1,6 @@
 """A fleet over ROS 2: the world in one process, each robot in its own; a robot's process
-killed, its orders go to the others (``plan-bridge run --ros`` on robosim_hospital)."""
+killed, its orders go to the others, and an order sent over ROS 2 meanwhile is planned
+for (``plan-bridge run --ros`` on robosim_hospital)."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ import sys
 import threading
 import time
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -19,6 +21,8 @@ from waiting import wait_until
 
 pytest.importorskip("smach.ros.rclpy_api", reason="needs rclpy (the ros extra)")
 pytest.importorskip("pyrobosim", reason="pyrobosim is not installed (the sim extra)")
+
+from order_operator import Operator
 
 pytestmark = pytest.mark.ros
 
@@ -33,18 +37,23 @@ orders:
 """
 
 
-def order_events(journal: Path) -> list[dict[str, object]]:
+def records(journal: Path, kind: str) -> list[dict[str, Any]]:
+    """The journal's records of ``kind`` so far."""
     if not journal.exists():
         return []
-    events = []
+    found = []
     for line in journal.read_text().splitlines():
         try:
             record = json.loads(line)
         except ValueError:
             continue  # the line being written
-        if record.get("kind") == "order":
-            events.append(record)
-    return events
+        if record.get("kind") == kind:
+            found.append(record)
+    return found
+
+
+def order_events(journal: Path) -> list[dict[str, Any]]:
+    return records(journal, "order")
 
 
 @pytest.mark.timeout(300)
@@ -54,7 +63,7 @@ def test_killing_a_robots_node_moves_its_orders_to_the_other_robots(tmp_path: Pa
     command = [
         sys.executable, "-m", "plan_bridge", "run", str(HOSPITAL), "--ros", "-v",
         "--orders", str(orders), "--seed", "2", "--fail-rate", "0", "--time-scale", "0.05",
-        "--journal", str(journal), "--json",
+        "--journal", str(journal), "--orders-open",
     ]  # fmt: skip
     process = subprocess.Popen(
         command, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
@@ -93,7 +102,22 @@ def test_killing_a_robots_node_moves_its_orders_to_the_other_robots(tmp_path: Pa
         os.kill(pids[victim], signal.SIGKILL)
         killed_at = time.monotonic()
         theirs = {str(e["order"]) for e in order_events(journal) if victim in (e["robots"] or [])}
-        stdout, _ = process.communicate(timeout=200)
+        # An order sent over ROS 2 while the mission runs, a robot short.
+        operator = Operator("/orders")
+        try:
+            assert operator.call("submit", "meds_to_icu1") == (True, "o1")
+            assert wait_until(lambda: "done" in operator.statuses("o1"), 200), operator.status
+        finally:
+            operator.close()
+
+        def settled() -> bool:
+            final = [e for e in order_events(journal) if e["status"] in ("done", "failed")]
+            return len({e["order"] for e in final}) == 5
+
+        assert wait_until(settled, 200), order_events(journal)
+        settled_at = time.monotonic()
+        process.send_signal(signal.SIGINT)  # open for orders: it runs until stopped
+        process.communicate(timeout=60)
     finally:
         if process.poll() is None:
             process.kill()
@@ -101,14 +125,14 @@ def test_killing_a_robots_node_moves_its_orders_to_the_other_robots(tmp_path: Pa
     reader.join(5)
     text = "\n".join(lines)
     assert "Traceback" not in text
-    report = json.loads(stdout)
-    counts = report["orders"]
     # Every order is accounted for: done, or failed with its reason (none lost).
-    assert counts["done"] + counts["failed"] + counts["refused"] == counts["orders"] == 4
-    gone = [d for d in report["decisions"] if d["decision"] == "gone"]
-    assert gone and victim in gone[0]["reason"], report["decisions"]
+    final = {e["order"]: e for e in order_events(journal) if e["status"] in ("done", "failed")}
+    assert sorted(final) == ["linen-a2", "meds-a1", "meds-b2", "o1", "sample-b"]
+    gone = [d for d in records(journal, "executive_decision") if d["decision"] == "gone"]
+    assert gone and victim in gone[0]["reason"], gone
+    # The order sent over ROS 2 was planned for, without the victim.
+    assert final["o1"]["status"] == "done" and victim not in final["o1"]["robots"]
     # The victim's orders were taken over: done by the others, none by the victim.
-    final = {str(e["order"]): e for e in order_events(journal) if e["status"] in ("done", "failed")}
     assert theirs, "the killed robot had no order"
     moved = [o for o in theirs if final[o]["status"] == "done"]
     assert moved, {o: final[o] for o in theirs}
@@ -116,10 +140,10 @@ def test_killing_a_robots_node_moves_its_orders_to_the_other_robots(tmp_path: Pa
         assert victim not in (final[order]["robots"] or []), final[order]
     for order in theirs - set(moved):
         assert final[order]["reason"], final[order]
-    took = [e for e in order_events(journal) if e["order"] in moved and e["status"] == "assigned"][
-        -1
-    ]
+    taken = [e for e in order_events(journal) if e["order"] in moved and e["status"] == "assigned"]
+    took = taken[-1]
     print(
         f"\n{victim} killed; its orders {sorted(theirs)} went to {took['robots']}; "
-        f"run ended {time.monotonic() - killed_at:.1f} s after the kill: {counts}"
+        f"every order final {settled_at - killed_at:.1f} s after the kill: "
+        f"{sorted((o, e['status'], e['robots']) for o, e in final.items())}"
     )

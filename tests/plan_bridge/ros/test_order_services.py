@@ -20,17 +20,14 @@ import pytest
 
 pytest.importorskip("smach.ros.rclpy_api", reason="needs rclpy (the ros extra)")
 
+from order_operator import Operator
 from ros_context import nodes_in_own_context
-from std_msgs.msg import String
-from std_srvs.srv import Trigger
-from test_msgs.srv import BasicTypes
 
 from plan_bridge.execution.control import OperatorConsole
 from plan_bridge.missions.mission import load_target
 from plan_bridge.missions.runner import MissionOptions, prepare_mission
 from plan_bridge.orders.order_executive import OrderExecutive
-from plan_bridge.ros.order_services import STATUS_DEPTH, OrderServices
-from smach.ros.rclpy_api import DurabilityPolicy, QoSProfile, ReliabilityPolicy, rclpy
+from plan_bridge.ros.order_services import OrderServices
 
 ROOMS = Path(__file__).parents[1] / "data" / "rooms"
 
@@ -43,56 +40,6 @@ def wait_until(predicate: Callable[[], bool], what: str, timeout: float = 60.0) 
         if time.monotonic() > deadline:
             raise AssertionError(f"timed out waiting for {what}")
         time.sleep(0.02)
-
-
-class Operator:
-    """Another process's view: its own context and node, spun in a thread; calls the
-    order services and collects the status topic."""
-
-    def __init__(self, base: str) -> None:
-        self.base = base
-        self.context = rclpy.Context()
-        rclpy.init(context=self.context)
-        self.node = rclpy.create_node("operator", context=self.context)
-        self.executor = rclpy.executors.SingleThreadedExecutor(context=self.context)
-        self.executor.add_node(self.node)
-        self.status: list[dict[str, Any]] = []
-        qos = QoSProfile(
-            depth=STATUS_DEPTH,
-            reliability=ReliabilityPolicy.RELIABLE,
-            durability=DurabilityPolicy.TRANSIENT_LOCAL,
-        )
-        self.node.create_subscription(
-            String, f"{base}/status", lambda m: self.status.append(json.loads(m.data)), qos
-        )
-        self.spinner = threading.Thread(target=self.executor.spin, daemon=True)
-        self.spinner.start()
-
-    def call(self, service: str, text: str = "") -> tuple[bool, str]:
-        kind = Trigger if service == "list" else BasicTypes
-        client = self.node.create_client(kind, f"{self.base}/{service}")
-        try:
-            assert client.wait_for_service(timeout_sec=20), f"no service {service}"
-            request = kind.Request()
-            if kind is BasicTypes:
-                request.string_value = text
-            future = client.call_async(request)
-            wait_until(future.done, f"{service} to answer", 20)
-            reply = future.result()
-        finally:
-            self.node.destroy_client(client)
-        if kind is Trigger:
-            return reply.success, reply.message
-        return reply.bool_value, reply.string_value
-
-    def statuses(self, order: str) -> list[str]:
-        return [m["status"] for m in list(self.status) if m["id"] == order]
-
-    def close(self) -> None:
-        self.executor.shutdown()
-        self.spinner.join(10)
-        self.node.destroy_node()
-        rclpy.shutdown(context=self.context)
 
 
 @pytest.fixture
