@@ -98,7 +98,9 @@ def _parser() -> argparse.ArgumentParser:
         help="pyrobosim world: be robot NAME's node only: run its skills here, under "
         "PREFIX/NAME, acting through the world node under PREFIX (started without --robot)",
     )
-    parser.add_argument("--node-name", default="skill_server")
+    parser.add_argument(
+        "--node-name", help="the ROS node's name (default: skill_server, robot_NAME with --robot)"
+    )
     parser.add_argument(
         "--lease",
         type=float,
@@ -227,7 +229,8 @@ def _serve(args: argparse.Namespace, robot: _Robot, make_server: ServerFactory) 
     """Serve the robot's skills on a node until SIGINT/SIGTERM (or the parent exits)."""
     parent = os.getppid()
     rclpy.init()
-    node = rclpy.create_node(args.node_name)
+    default_name = "skill_server" if args.robot is None else f"robot_{args.robot}"
+    node = rclpy.create_node(args.node_name or default_name)
 
     def say(line: str) -> None:
         print(line, flush=True)

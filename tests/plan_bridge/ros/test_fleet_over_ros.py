@@ -147,3 +147,56 @@ def test_killing_a_robots_node_moves_its_orders_to_the_other_robots(tmp_path: Pa
         f"every order final {settled_at - killed_at:.1f} s after the kill: "
         f"{sorted((o, e['status'], e['robots']) for o, e in final.items())}"
     )
+
+
+def skill_server(*args: str) -> subprocess.Popen[str]:
+    return subprocess.Popen(
+        [sys.executable, "-m", "plan_bridge.ros.skill_server", *args],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
+
+
+@pytest.mark.timeout(240)
+def test_world_and_robot_nodes_started_by_hand_run_a_mission_with_no_robot() -> None:
+    """As on two machines: the world node and each robot's node started by hand (their
+    own seed and fault rate count), the executive connects with --no-robot."""
+    two = str(ROOT / "domains" / "robosim_two_robots")
+    nodes = [
+        skill_server(two, "--prefix", "fleet", "--seed", "3"),
+        *(skill_server(two, "--prefix", "fleet", "--robot", name) for name in ("ada", "bob")),
+    ]
+    try:
+        for node in nodes:
+            assert node.stdout is not None and node.stdout.readline().strip() == "ready"
+        run = subprocess.run(
+            [sys.executable, "-m", "plan_bridge", "run", two, "--ros", "--no-robot",
+             "--ros-prefix", "fleet", "--json"],
+            cwd=ROOT, capture_output=True, text=True, timeout=150,
+        )  # fmt: skip
+    finally:
+        for node in nodes:
+            node.send_signal(signal.SIGTERM)
+        outputs = [node.communicate(timeout=30)[0] for node in nodes]
+    assert run.returncode == 0, run.stderr
+    report = json.loads(run.stdout)
+    assert report["goal_reached"] and report["seed"] == 3
+    assert "ros: robot node of ada /robot_ada (already running)" in run.stderr
+    assert "the world on /fleet" in run.stderr
+    # Each robot ran its own steps in its own process; the world counted the faults.
+    for name, output in zip(("ada", "bob"), outputs[1:], strict=True):
+        done = re.findall(r"^succeeded \((\w+) (\w+)", output, re.MULTILINE)
+        assert done and {robot for _, robot in done} == {name}, output
+    assert re.search(r"^faults \d+$", outputs[0], re.MULTILINE), outputs[0]
+    assert all(node.returncode == 0 for node in nodes)
+
+
+@pytest.mark.timeout(60)
+def test_a_robot_node_of_no_such_robot_exits_2_naming_the_robots() -> None:
+    node = skill_server(str(ROOT / "domains" / "robosim_two_robots"), "--robot", "zed")
+    output, _ = node.communicate(timeout=50)
+    assert node.returncode == 2
+    assert "--robot zed: no such robot in robosim_two_robots; robots: ada, bob" in output
+    assert "Traceback" not in output
