@@ -314,8 +314,7 @@ def _connect_robot(
         events=args.events,
         log=None if args.quiet else sys.stderr,
         echo_robot=args.verbose,  # the robot's goals and skill states: with -v only
-        # A pyrobosim world: the world in one node, each robot in a node of its own.
-        robot_nodes=_is_world(target),
+        robot_nodes=_is_world(target),  # a pyrobosim world: a node per robot
     )
     resources.callback(robot.close)
     return robot.open()
@@ -346,8 +345,7 @@ def _run_mission(args: argparse.Namespace, started: float, resources: Any = None
         if isinstance(executive, OrderExecutive):
             # Orders over ROS 2: /orders/submit, cancel, list, the status topic (docs/orders.md).
             start.robot.serve_orders(executive.desk())
-            # A robot whose node is gone is left out of plans: the others take its orders.
-            executive.robots_gone = start.robot.robots_gone
+            executive.robots_gone = start.robot.robots_gone  # its orders go to others
     if checkpoint is not None:
         mission.resume(checkpoint)
     if not args.quiet:
@@ -500,12 +498,7 @@ def _start_mission(args: argparse.Namespace, target: Target, resources: Any) -> 
             task_view=target.task_view,
             planner_for=target.planner_for,
         ),
-        (
-            f"pyrobosim skills on the robot nodes /{robot.prefix}/ROBOT "
-            f"({', '.join(robot.members)}), the world on /{robot.prefix}"
-            if robot.members
-            else f"{robot.robot_info.get('mode')} on the robot node /{robot.prefix}"
-        ),
+        robot.describe(),
         robot,
     )
 

@@ -175,7 +175,7 @@ class _PacedCondition(ClockCondition):
         self.wait(None if deadline is None else max(0.0, self._clock.wall_left(deadline)))
 
 
-class PacedClock:
+class PacedClock(WallClock):
     """Simulated seconds of a world that paces itself in another process: ``time_scale``
     wall seconds per simulated second, counted from when the clock was made (a robot
     node of ``plan-bridge run --ros`` runs its world at that pace). Waits are real waits
@@ -201,15 +201,6 @@ class PacedClock:
 
     def condition(self) -> ClockCondition:
         return _PacedCondition(self)
-
-    def admit(self, key: int) -> Ticket:
-        return Ticket(key, 0)
-
-    def turn(self, ticket: Ticket) -> AbstractContextManager[None]:
-        return contextlib.nullcontext()
-
-    def discard(self, ticket: Ticket) -> None:
-        pass
 
 
 class HasClock(Protocol):

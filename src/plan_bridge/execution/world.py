@@ -23,7 +23,7 @@ class World(Protocol):
     Implemented by the symbolic :class:`~plan_bridge.execution.simulation.SimulatedWorld`
     (and its subclasses: :class:`~plan_bridge.execution.timed_world.TimedWorld`, the
     domains' worlds) and by the ROS 2 robot seen from the executive
-    (:class:`~plan_bridge.ros.connection.RobotWorld`). Skills act on the world; the
+    (:class:`~plan_bridge.ros.robot_world.RobotWorld`). Skills act on the world; the
     executive never reads its truth, only what skills observe and what :meth:`sense`
     returns. The skill contract (docs/plan-bridge.md) says what each call means.
     """

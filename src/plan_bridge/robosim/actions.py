@@ -1,7 +1,7 @@
 """The robot actions of the robosim domain, over pyrobosim's robot API.
 
 Each function runs one action of one robot in a :class:`~.world.RobosimWorld` and
-returns an :class:`~.world.ActionResult` (pyrobosim's ``ExecutionStatus``): it applies
+returns an :class:`~.results.ActionResult` (pyrobosim's ``ExecutionStatus``): it applies
 the events that are due, calls pyrobosim in a worker thread (a preempt cancels the
 robot's action), and spends the action's simulated time on the world's clock. The
 skills (:mod:`.skills`) are SMACH machines made of these calls.
@@ -16,8 +16,9 @@ from typing import Any
 
 from plan_bridge.maps.graph import Leg, Route
 from plan_bridge.robosim.description import AT_PLACE_M
+from plan_bridge.robosim.results import ACTION_SECONDS, ActionResult
 from plan_bridge.robosim.room_paths import room_path
-from plan_bridge.robosim.world import ACTION_SECONDS, ActionResult, RobosimWorld
+from plan_bridge.robosim.world import RobosimWorld
 
 __all__ = ["act", "cross_path", "drive_route", "follow", "plan_route"]
 

@@ -19,7 +19,8 @@ from typing import Any, Protocol
 
 from plan_bridge.belief import Observation
 from plan_bridge.robosim.actions import act, cross_path, drive_route, follow, plan_route
-from plan_bridge.robosim.world import ActionResult, RobosimWorld
+from plan_bridge.robosim.results import ActionResult
+from plan_bridge.robosim.world import RobosimWorld
 
 __all__ = ["Body", "Preempted", "WorldBody"]
 

@@ -27,7 +27,8 @@ from collections.abc import Callable
 
 import smach
 from plan_bridge.robosim.body import Body, WorldBody
-from plan_bridge.robosim.world import ActionResult, RobosimWorld
+from plan_bridge.robosim.results import ActionResult
+from plan_bridge.robosim.world import RobosimWorld
 from plan_bridge.skills.kit import SKILL_OUTCOMES, skill_machine
 from plan_bridge.skills.registry import OBSERVATIONS_KEY, SkillRegistry
 

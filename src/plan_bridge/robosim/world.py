@@ -3,7 +3,7 @@
 **Time.** Simulated seconds on the world's :class:`~plan_bridge.execution.clock.SimClock`,
 spent by what the robots do: a drive takes its trajectory's time (path length at the
 path executor's speed, turns included), the other actions fixed durations
-(:data:`ACTION_SECONDS`, the domain's). pyrobosim runs as fast as the CPU allows
+(:data:`~.results.ACTION_SECONDS`, the domain's). pyrobosim runs as fast as the CPU allows
 (``realtime_factor=-1``); with ``time_scale > 0`` drives run at ``1 / time_scale`` of
 real time and the other actions wait their paced time, so a viewer can follow (and a
 preempt stops a drive half-way).
@@ -33,7 +33,6 @@ import math
 import threading
 import time
 from collections.abc import Callable, Iterable, Iterator, Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -47,44 +46,18 @@ from plan_bridge.robosim.description import describe_world, robot_place
 from plan_bridge.robosim.events import WorldEvent, check_events
 from plan_bridge.robosim.loading import load_world_file, quiet_stdout
 from plan_bridge.robosim.picture import TRAIL_CHUNK, scene_picture
+from plan_bridge.robosim.results import ActionResult
 
 if TYPE_CHECKING:
     from plan_bridge.planning.types import PlanStep
 
-__all__ = ["ACTION_SECONDS", "TRAIL_POINTS", "ActionResult", "RobosimWorld"]
+__all__ = ["TRAIL_POINTS", "RobosimWorld"]
 
-#: Simulated seconds of the actions that are not drives (as in the domain).
-ACTION_SECONDS = {
-    "pick": 2.0,
-    "place": 2.0,
-    "open": 3.0,
-    "close": 3.0,
-    "detect": 1.0,
-    "search": 1.0,
-    "charge": 10.0,
-}
 #: The robot actions that get seeded ExecutionOptions (faults).
 FAULTY = ("navigate", "pick", "place", "detect", "open", "close", "charge")
 #: Poses a robot's trail keeps (about; the newest): a mission's drives whole, the last
 #: part of a day's. They are dropped a picture's line at a time (``TRAIL_CHUNK``).
 TRAIL_POINTS = 3000
-
-
-@dataclass(frozen=True)
-class ActionResult:
-    """What a robot action ended with: pyrobosim's ``ExecutionStatus`` name and message."""
-
-    status: str
-    message: str = ""
-
-    @property
-    def outcome(self) -> str:
-        """The skill outcome: ``succeeded``, ``preempted`` (CANCELED) or ``aborted``."""
-        return {"SUCCESS": "succeeded", "CANCELED": "preempted"}.get(self.status, "aborted")
-
-    @classmethod
-    def of(cls, result: Any) -> ActionResult:
-        return cls(str(result.status.name), str(result.message or ""))
 
 
 class RobosimWorld:
@@ -196,27 +169,25 @@ class RobosimWorld:
         return float(self.clock.now())
 
     def elapse(self, seconds: float) -> None:
-        """The calling thread's action took ``seconds`` of simulated time. Within
-        :meth:`own_timeline`, the thread's actions follow one another from when it
-        began, and the clock is at least at the end of the latest."""
-        if seconds <= 0:
-            return
-        if self.clock.taking_part():
-            self.clock.sleep(seconds)
-            return
+        """The calling thread's action took ``seconds`` of simulated time (in
+        :meth:`own_timeline`, on the thread's own timeline)."""
         at = getattr(self._timeline, "at", None)
-        if at is None:
+        if seconds <= 0:
+            pass
+        elif self.clock.taking_part():
+            self.clock.sleep(seconds)
+        elif at is None:
             self.clock.advance(seconds)
-            return
-        self._timeline.at = at + seconds
-        with self._lock:
-            self.clock.advance(self._timeline.at - self.clock.now())
+        else:
+            self._timeline.at = at + seconds
+            with self._lock:
+                self.clock.advance(self._timeline.at - self.clock.now())
 
     @contextlib.contextmanager
     def own_timeline(self) -> Iterator[None]:
-        """Run the calling thread's actions on a timeline of their own, from now: robots
-        acting at once from threads that do not take turns on the clock (a world node
-        serving robot nodes) overlap in time instead of adding up."""
+        """The calling thread's actions on a timeline of their own, from now (the clock
+        at the end of the latest of them): robots acting at once from threads that take
+        no turns (a world node's) overlap in time instead of adding up."""
         self._timeline.at = self.now()
         try:
             yield

@@ -39,8 +39,9 @@ from typing import Any
 from plan_bridge.belief import Observation
 from plan_bridge.pddl.task import format_fact, parse_fact
 from plan_bridge.robosim.body import Body, Preempted, WorldBody
+from plan_bridge.robosim.results import ActionResult
 from plan_bridge.robosim.skills import ACTIONS
-from plan_bridge.robosim.world import ActionResult, RobosimWorld
+from plan_bridge.robosim.world import RobosimWorld
 from plan_bridge.ros.protocol import (
     MAX_PAYLOAD,
     MAX_PERFORM_HOLD,

@@ -11,8 +11,9 @@ pytest.importorskip("pyrobosim", reason="pyrobosim is not installed (the sim ext
 
 from plan_bridge.planning.planner import PlanStep
 from plan_bridge.robosim.events import EventError, WorldEvent, load_events
+from plan_bridge.robosim.results import ActionResult
 from plan_bridge.robosim.skills import skill_for
-from plan_bridge.robosim.world import ActionResult, RobosimWorld
+from plan_bridge.robosim.world import RobosimWorld
 
 FETCH = Path(__file__).resolve().parents[3] / "domains" / "robosim_fetch"
 
