@@ -138,14 +138,16 @@ def run(
 def kill_times(journal: Path, robot: str, killed_at: float) -> dict[str, Any]:
     """Seconds from the kill to the robot's step aborting, the ``gone`` decision and its
     first order taken by another robot."""
-    theirs: set[str] = set()
+    held: dict[str, bool] = {}  # order -> the robot had it, unfinished, at the kill
     aborted = gone = taken = None
     for record in records(journal):
         kind, at = record.get("kind"), record.get("time", 0.0)
-        if kind == "order" and at < killed_at and robot in (record.get("robots") or []):
-            theirs.add(record["order"])
+        if kind == "order" and at < killed_at:
+            open_ = record["status"] in ("queued", "assigned", "active")
+            held[record["order"]] = open_ and robot in (record.get("robots") or [])
         if at < killed_at:
             continue
+        theirs = {order for order, had in held.items() if had}
         words = str(record.get("action", "")).strip("()").split()
         if (
             aborted is None
@@ -166,7 +168,7 @@ def kill_times(journal: Path, robot: str, killed_at: float) -> dict[str, Any]:
             taken = at - killed_at
     return {
         "robot": robot,
-        "its_orders": sorted(theirs),
+        "its_orders": sorted(order for order, had in held.items() if had),
         "step_aborted_s": aborted,
         "gone_s": gone,
         "taken_over_s": taken,
@@ -179,11 +181,11 @@ def main() -> None:
     parser.add_argument("--minutes", type=float, default=30.0, help="of the steady stream")
     parser.add_argument("--fail-rate", type=float, default=0.2)
     parser.add_argument("--time-scale", type=float, default=0.1, help="of the robot nodes")
-    parser.add_argument("--quick", action="store_true", help="one seed, 8 minutes")
-    parser.add_argument("--json", action="store_true", help="print the results as JSON")
+    parser.add_argument("--quick", action="store_true", help="one seed, 5 minutes")
+    parser.add_argument("--json", metavar="FILE", help="write the results as JSON")
     args = parser.parse_args()
     if args.quick:
-        args.seeds, args.minutes = "1", 8.0
+        args.seeds, args.minutes = "1", 5.0
     seeds = [int(s) for s in args.seeds.split(",")]
     env_note = os.environ.get("ROS_DOMAIN_ID", "0")
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
@@ -199,11 +201,11 @@ def main() -> None:
             common = [
                 sys.executable, "-m", "plan_bridge", "run", str(HOSPITAL),
                 "--orders", str(orders), "--events", str(events), "--seed", str(seed),
-                "--fail-rate", str(args.fail_rate), "--quiet", "--json",
+                "--fail-rate", str(args.fail_rate), "--json",
             ]  # fmt: skip
             local_journal, ros_journal = folder / f"local{seed}.jsonl", folder / f"ros{seed}.jsonl"
-            local = run([*common, "--journal", str(local_journal)], local_journal, kill=None,
-                        timeout=3600)  # fmt: skip
+            local = run([*common, "--quiet", "--journal", str(local_journal)], local_journal,
+                        kill=None, timeout=3600)  # fmt: skip
             ros = run(
                 [*common, "--ros", "-v", "--time-scale", str(args.time_scale),
                  "--journal", str(ros_journal)],
@@ -214,7 +216,7 @@ def main() -> None:
             results.append({"seed": seed, "local": local, "ros": ros, "kill_sim_s": at_sim})
             show(seed, local, ros, at_sim)
     if args.json:
-        print(json.dumps(results, indent=1))
+        Path(args.json).write_text(json.dumps(results, indent=1), encoding="utf-8")
     summary(results, args, env_note)
 
 
