@@ -4,8 +4,9 @@ A :class:`RobotConnection` joins the ROS graph with its own rclpy context and no
 starts a robot node (``python -m plan_bridge.ros.skill_server``) as a subprocess or
 connects to one that is already running, checks that the robot runs the same
 problem (``info``: :func:`~plan_bridge.ros.protocol.task_digest`), and builds the
-executive's skills as ROS clients of it (:func:`~plan_bridge.ros.ros_skills`).
-:meth:`close` leaves the graph and stops the robot process it started.
+executive's skills as ROS clients of it (:func:`~plan_bridge.ros.ros_skills`). For a
+pyrobosim world it does the same for the world node and a node per robot.
+:meth:`close` leaves the graph and stops the processes it started.
 """
 
 from __future__ import annotations
@@ -70,6 +71,13 @@ class RobotConnection:
     connect to the robot node already serving under ``prefix``. ``log`` receives
     what happens, and with ``echo_robot`` the robot's own lines, prefixed
     ``[robot]`` (the goals and the states of its skills).
+
+    ``robot_nodes`` (a pyrobosim world): the node under ``prefix`` is the *world node*,
+    and each robot of the world has a node of its own under ``PREFIX/ROBOT``
+    (:attr:`members`, started side by side or found), running its skill machines
+    through the world node's bodies (:mod:`plan_bridge.ros.body_link`). Each step goes
+    to its robot's node; :meth:`robots_gone` says whose node is gone. Lines are
+    prefixed ``[world]`` and ``[ROBOT]``.
     """
 
     #: Seconds to wait for a robot we started to print ``ready``.
