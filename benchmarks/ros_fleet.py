@@ -13,8 +13,8 @@ and faults (``--fail-rate``), and runs twice, as a user runs it:
 * **in one process**: ``plan-bridge run ... --orders --events --json``;
 * **over ROS 2**: the same with ``--ros`` (a world node and a node per robot, each a
   process of its own, at ``--time-scale``), and one robot's node, drawn from the seed,
-  killed with SIGKILL at a moment drawn from the seed (between 20 % and 60 % of the
-  stream).
+  killed with SIGKILL in its first drive after a moment drawn from the seed (between
+  20 % and 60 % of the stream).
 
 It prints, per run, the orders by status, any order left open (lost) or done twice,
 latency p50/p95, the wall time, and for the kill the seconds from the kill to: the
@@ -27,6 +27,7 @@ orders taken by another robot. Times come from the journal (``time``, the execut
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import random
@@ -118,8 +119,15 @@ def run(
         if pid is None:
             raise SystemExit(f"the robot node of {robot} did not start:\n{''.join(lines)[-3000:]}")
         time.sleep(after_s)
-        os.kill(pid, signal.SIGKILL)
-        killed_at = time.monotonic()
+        # Mid-drive: at the robot's next drive from then on (or the end of the stream).
+        seen = len(lines)
+        while process.poll() is None and not any(
+            f"[{robot}]   state /navigate/DRIVE" in line for line in lines[seen:]
+        ):
+            time.sleep(0.02)
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(pid, signal.SIGKILL)
+            killed_at = time.monotonic()
     out, _ = process.communicate(timeout=timeout)
     reader.join(10)
     if process.returncode not in (0, 1):
