@@ -183,7 +183,8 @@ class RouteTasks:
         every_action: bool = False,
     ) -> PlanningTask:
         """The task of ``goal`` (atoms of the map domain) from the belief ``facts``, for
-        ``robots`` (lower-case names; all when None). ``closed``: the hallways to
+        ``robots`` (lower-case names; when None, all that the belief places, and
+        :class:`TaskError` if it places none). ``closed``: the hallways to
         route round (by default those the belief does not hold open; a part of a task
         is made with the task's own, :meth:`closed_for`). ``search_at``: a lost object
         -> the places this task looks for it at (by default the first ones of
@@ -239,8 +240,12 @@ class RouteTasks:
         search_at: Mapping[str, Sequence[str]],
     ) -> _Needs:
         needs = _Needs()
-        chosen = list(robots) if robots is not None else self.robots()
         where, held = whereabouts(facts)
+        chosen = list(robots) if robots is not None else self.robots()
+        if robots is None and any(robot in where for robot in chosen):
+            # Every robot the belief places: one it cannot (whose node died mid-drive,
+            # out of sight) gets no part in the task until it is seen again.
+            chosen = [robot for robot in chosen if robot in where]
         for robot in chosen:
             place = where.get(robot)
             if place is None:

@@ -96,6 +96,20 @@ def test_a_robot_the_belief_does_not_place_is_an_error(house: Any) -> None:
         view.task_for(lost, [("at", "apple", "shelf_top")])
 
 
+def test_a_robot_the_belief_does_not_place_is_left_out_while_another_is_placed(
+    house: Any,
+) -> None:
+    """A robot whose node died mid-drive is nowhere in the belief: the task is the
+    other robots'; asked for by name, it is still an error."""
+    view = RouteTasks(house(rover=True))
+    belief = view.belief()
+    lost = FactSnapshot(belief - {("at", "robot", "kitchen")}, belief.values)
+    task = view.task_for(lost, [("at", "apple", "shelf_top")])
+    assert "rover" in task.objects and "robot" not in task.objects
+    with pytest.raises(TaskError, match="does not say where robot is"):
+        view.task_for(lost, [("at", "apple", "shelf_top")], robots=["robot", "rover"])
+
+
 def test_the_spec_writes_the_task_as_pddl(house: Any) -> None:
     view = RouteTasks(house())
     task = view.task_for(view.belief(), [("at", "apple", "shelf_top")])
