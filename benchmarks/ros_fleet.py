@@ -87,6 +87,7 @@ def orders_of(journal: Path) -> dict[str, Any]:
         "open": sorted(o for o, r in last.items() if r["status"] not in final),
         "done_twice": sorted(o for o, n in done.items() if n > 1),
         "failed": {o: r["reason"] for o, r in last.items() if r["status"] == "failed"},
+        "refused": {o: r["reason"] for o, r in last.items() if r["status"] == "refused"},
     }
 
 
@@ -244,8 +245,9 @@ def show(seed: int, local: dict[str, Any], ros: dict[str, Any], at_sim: float) -
             f"gone after {fmt(kill['gone_s'])}, an order taken over after "
             f"{fmt(kill['taken_over_s'])}"
         )
-    for order, reason in ros["tally"]["failed"].items():
-        print(f"  failed {order}: {reason[:160]}")
+    for status in ("failed", "refused"):
+        for order, reason in ros["tally"][status].items():
+            print(f"  {status} {order}: {reason[:160]}")
 
 
 def fmt(seconds: float | None) -> str:

@@ -388,6 +388,16 @@ class OrderExecutive(Executive):
     def _no_plan_for(self, state: OrderState, result: Any) -> None:
         """No plan reaches ``state``'s goal: refused when it never started, else failed."""
         why = f"no plan for it ({result.status.value}): {result.explanation}"
+        out, gone = self._out_now(), self._gone()
+        things = {arg for atom in state.atoms for arg in atom[1:]}
+        # What a robot left out of plans has of the order's things (a parcel it carries).
+        held = sorted(
+            f"{format_fact(fact)}: {fact[1]} {'gone' if fact[1] in gone else 'benched'}"
+            for fact in self.belief.facts
+            if len(fact) > 2 and fact[1] in out and things.intersection(fact[2:])
+        )
+        if held:
+            why += f" (left out of plans with its robot: {'; '.join(held)})"
         now = self.now()
         if state.started is None:
             self.orders.refuse(state.id, f"no robot can reach it: {why}", now)
@@ -485,10 +495,13 @@ class OrderExecutive(Executive):
             f"failed past recovery; the other robots take its orders",
         )
 
+    def _out_now(self) -> set[str]:
+        """The robots left out of plans now: benched, or gone."""
+        now = self.now()
+        return {r for r, until in self.benched.items() if until > now} | self._gone()
+
     def _without_benched(self, facts: FactSnapshot) -> FactSnapshot:
         """``facts`` without those of the robots benched or gone now."""
-        now = self.now()
-        out = {r for r, until in self.benched.items() if until > now}
         gone = self._gone()
         if gone - self._announced_gone:
             self.decide(
@@ -497,7 +510,7 @@ class OrderExecutive(Executive):
                 f"not there): left out of plans, the other robots take its orders",
             )
         self._announced_gone = gone
-        out |= gone
+        out = self._out_now()
         if not out:
             return facts
         kept = [f for f in facts if not any(arg in out for arg in f[1:])]

@@ -210,3 +210,46 @@ def test_step_numbers_go_on_across_the_plans_of_the_orders(task: PlanningTask) -
     indices = [e.index for e in events if e.kind == "step_finished"]
     assert len(indices) == len(set(indices)) == executive.report.actions_executed
     assert len([e for e in events if e.kind == "plan_computed"]) >= 2
+
+
+def test_a_courier_whose_node_is_gone_is_left_out_and_the_other_takes_its_order(
+    task: PlanningTask,
+) -> None:
+    """``robots_gone`` (a robot node's process died, ``run --ros``): planned without."""
+    executive, _ = mission(task, Order("near-ann", "(lies p3 mid)", 0.0))
+    executive.robots_gone = lambda: {"ann"}
+    assert executive.execute() == "succeeded"
+    state = executive.orders.get("near-ann")
+    assert state.status == "done" and state.robots == ("bo",)
+    gone = [d for d in executive.report.decisions if d["decision"] == "gone"]
+    assert len(gone) == 1 and gone[0]["reason"].startswith("ann gone (its robot node")
+
+
+def test_an_order_whose_parcel_a_gone_courier_carries_fails_naming_it(
+    task: PlanningTask,
+) -> None:
+    executive, _ = mission(task, Order("p3-east", "(lies p3 east)", 0.0))
+    gone: set[str] = set()
+
+    class DiesWithItsNode(SymbolicSkill):
+        """A step of a courier whose node is gone aborts (as RobotLost does over ROS)."""
+
+        def execute(self, ud: smach.UserData) -> str:
+            return "aborted" if self.step.arguments[0] in gone else super().execute(ud)
+
+    world = executive.skills.world
+    executive.skills.fallback = lambda step: DiesWithItsNode(world, step)  # type: ignore[arg-type]
+    executive.robots_gone = lambda: gone
+
+    def on_event(event: Event) -> None:
+        # ann's node dies once it has taken the parcel: the parcel goes with it.
+        if getattr(event, "kind", "") == "step_finished" and "(take ann p3" in str(
+            getattr(event, "action", "")
+        ):
+            gone.add("ann")
+
+    executive.add_listener(on_event)
+    assert executive.execute() == "succeeded"
+    state = executive.orders.get("p3-east")
+    assert state.status == "failed"
+    assert "(carries ann p3): ann gone" in state.reason, state.reason
