@@ -117,7 +117,7 @@ class FleetPlanner:
         jobs = jobs_of(atoms, robots, facts, self.view)
         if len(robots) < 2 or not jobs:
             return self._solve_one(task, facts, atoms, timeout, cancel)
-        plan = _Planning(facts, closed, started + timeout, cancel, started)
+        plan = _Planning(facts, closed, started + timeout, cancel, started, tuple(robots))
         split = self._search_split(task, jobs, robots, plan)
         if split is not None:
             return split
@@ -286,8 +286,8 @@ class FleetPlanner:
         if plan.left() <= 0:
             return failed
         jobs = shares[robot]
-        idle = [r for r in self.view.robots() if r not in shares and r != robot]
-        others = idle or [r for r in self.view.robots() if r != robot]
+        idle = [r for r in plan.robots if r not in shares and r != robot]
+        others = idle or [r for r in plan.robots if r != robot]
         helpers = self._by_distance(jobs[0].start, others, plan)[:1]
         if not helpers:
             return failed
@@ -371,6 +371,8 @@ class _Planning:
     deadline: float
     cancel: threading.Event | None
     started: float
+    robots: tuple[str, ...] = ()
+    """The robots the belief places (the others get no part)."""
 
     def left(self) -> float:
         return self.deadline - time.monotonic()

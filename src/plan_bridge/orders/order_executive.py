@@ -341,7 +341,8 @@ class OrderExecutive(Executive):
         if self.upkeep is None:
             return ()
         facts = self.belief.facts
-        return tuple(self.upkeep(facts, values_of(facts)))
+        out = self._out_now()  # no charge for a robot left out of plans
+        return tuple(a for a in self.upkeep(facts, values_of(facts)) if out.isdisjoint(a[1:]))
 
     def _plan_for(self, horizon: list[OrderState], upkeep: tuple[Fact, ...] = ()) -> list[PlanStep]:
         """A plan for the orders of ``horizon`` and the robots' ``upkeep``; [] when none

@@ -2,15 +2,19 @@
 
 from __future__ import annotations
 
+import dataclasses
 import gc
+import time
 from typing import Any
 
 import pytest
 
 from plan_bridge.belief import FactSnapshot
 from plan_bridge.execution.semantics import ActionModel
-from plan_bridge.fleet.planner import FleetPlanner
+from plan_bridge.fleet.jobs import jobs_of
+from plan_bridge.fleet.planner import FleetPlanner, _Planning
 from plan_bridge.maps.tasks import RouteTasks
+from plan_bridge.planning.types import PlanResult, PlanStatus
 
 pytestmark = pytest.mark.timeout(120)
 
@@ -52,6 +56,33 @@ def test_one_job_is_planned_with_the_two_nearest_robots(kairos: Any, house: Any)
     result = FleetPlanner(kairos, view).solve(task, timeout=30)
     assert result.solved
     assert ActionModel(task).check_plan(result.actions, start(task)).valid
+
+
+def test_a_robot_the_belief_does_not_place_gets_no_part_not_even_as_a_helper(
+    kairos: Any, house: Any
+) -> None:
+    """A robot whose node died mid-drive is nowhere in the belief (left out of plans)."""
+    model = house(rover=True)
+    ghost = dataclasses.replace(model.robots[0], name="ghost")
+    view = RouteTasks(dataclasses.replace(model, robots=(*model.robots, ghost)))
+    belief = view.belief()
+    nowhere = FactSnapshot(
+        [f for f in belief if "ghost" not in f[1:]],
+        {k: v for k, v in belief.values.items() if "ghost" not in k[1:]},
+    )
+    task = view.task_for(nowhere, SWAP)
+    assert "ghost" not in task.objects
+    fleet = FleetPlanner(kairos, view)
+    result = fleet.solve(task, timeout=30)
+    assert result.solved and {s.arguments[0] for s in result.actions} <= {"robot", "rover"}
+    # A share with no plan alone asks a robot with no share to help (none but the ghost
+    # here), else the nearest placed robot: never the ghost.
+    facts = start(task)
+    plan = _Planning(facts, frozenset(), time.monotonic() + 30, None, 0.0, ("robot", "rover"))
+    shares = {"robot": jobs_of([("at", "pear", "desk_top")], ["robot"], facts, view), "rover": []}
+    failed = PlanResult(PlanStatus.UNSOLVABLE, [])
+    helped = fleet._with_helper("robot", shares, plan, failed)
+    assert helped.solved and {s.arguments[0] for s in helped.actions} <= {"robot", "rover"}
 
 
 def test_one_robot_is_planned_as_the_inner_planner_does(kairos: Any, house: Any) -> None:
