@@ -294,7 +294,8 @@ class OrderExecutive(Executive):
     def _horizon(self) -> list[OrderState]:
         """The open orders to plan for now: those under way first (their robots keep
         them), then by priority and arrival."""
-        cap = max(1, len(self.robots)) * self.per_robot
+        # per_robot orders for each robot that plans can use (not benched, not gone)
+        cap = max(1, len(self.robots - self._out_now())) * self.per_robot
         open_orders = sorted(
             (s for s in self.orders.open_orders() if s.id not in self._deferred),
             key=lambda s: s.status is not OrderStatus.ACTIVE,

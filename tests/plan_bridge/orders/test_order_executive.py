@@ -253,3 +253,17 @@ def test_an_order_whose_parcel_a_gone_courier_carries_fails_naming_it(
     state = executive.orders.get("p3-east")
     assert state.status == "failed"
     assert "(carries ann p3): ann gone" in state.reason, state.reason
+
+
+def test_with_a_courier_gone_the_horizon_is_the_orders_of_the_couriers_left(
+    task: PlanningTask,
+) -> None:
+    executive, events = mission(
+        task, Order("a", "(lies p3 mid)", 0.0), Order("b", "(lies p2 west)", 0.0), per_robot=1
+    )
+    executive.robots_gone = lambda: {"ann"}
+    assert executive.execute() == "succeeded"
+    assert [executive.orders.get(o).robots for o in ("a", "b")] == [("bo",), ("bo",)]
+    plans = [e.reason for e in events if e.kind == "plan_computed"]
+    # One courier left, one order a courier: planned one after the other.
+    assert plans[0].startswith("orders a") and "b" not in plans[0].split(" (")[0], plans
