@@ -29,7 +29,6 @@ controller dies.
 from __future__ import annotations
 
 import json
-import math
 import secrets
 import threading
 import time
@@ -37,7 +36,6 @@ from collections.abc import Callable, Iterable, Sequence
 from typing import Any
 
 from plan_bridge.belief import Observation
-from plan_bridge.pddl.task import format_fact, parse_fact
 from plan_bridge.robosim.body import Body, Preempted, WorldBody
 from plan_bridge.robosim.results import ActionResult
 from plan_bridge.robosim.skills import ACTIONS
@@ -48,6 +46,8 @@ from plan_bridge.ros.protocol import (
     PERFORM_DONE,
     PERFORM_HOLD,
     PERFORM_RUNNING,
+    decode_observations,
+    encode_observations,
     interfaces,
 )
 
@@ -75,16 +75,15 @@ class _Call:
     def preempted(self) -> bool:
         return self.cancelled or time.monotonic() - self.asked > ORPHAN_S
 
-    def finish(self, result: ActionResult, route: int | None = None, seen: Any = ()) -> None:
+    def finish(
+        self, result: ActionResult, route: int | None = None, seen: Iterable[Observation] = ()
+    ) -> None:
         self.result = json.dumps(
             {
                 "status": result.status,
                 "message": result.message,
                 "route": route,
-                "observations": [
-                    [format_fact(fact), value if isinstance(value, bool) else float(value)]
-                    for fact, value in seen
-                ],
+                "observations": encode_observations(seen),
             }
         )
         self.done.set()
@@ -280,17 +279,10 @@ class RemoteBody(Body):
 
     def look(self, robot: str, about: Iterable[str]) -> list[Observation]:
         reply = self._ask({"op": "look", "robot": robot, "action": "", "args": list(about)})
-        seen: list[Observation] = []
-        for item in reply.get("observations") or []:
-            if (
-                isinstance(item, list)
-                and len(item) == 2
-                and isinstance(item[0], str)
-                and isinstance(item[1], (bool, float))
-                and (isinstance(item[1], bool) or math.isfinite(item[1]))
-            ):
-                seen.append((parse_fact(item[0]), item[1]))
-        return seen
+        try:
+            return decode_observations(reply.get("observations") or [])
+        except ValueError:
+            return []  # a malformed reading is no reading
 
     def _ask(self, call: dict[str, Any], preempted: Preempted | None = None) -> dict[str, Any]:
         """The world's JSON reply to ``call``, asked under one request id until done."""

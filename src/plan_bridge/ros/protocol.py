@@ -73,7 +73,9 @@ __all__ = [
     "SUBMIT_SERVICE",
     "Performance",
     "action_topic",
+    "decode_observations",
     "decode_result",
+    "encode_observations",
     "encode_result",
     "interfaces",
     "task_digest",
@@ -113,27 +115,27 @@ def action_topic(prefix: str, action: str) -> str:
 def encode_result(
     ok: bool, observations: Iterable[tuple[Fact, bool | float]], detail: str = ""
 ) -> str:
-    # A numeric fluent's reading (a number) is passed on as a number.
     return json.dumps(
         {
             "outcome": "succeeded" if ok else "aborted",
-            "observations": [
-                [format_fact(fact), truth if isinstance(truth, bool) else float(truth)]
-                for fact, truth in observations
-            ],
+            "observations": encode_observations(observations),
             "detail": detail,
         }
     )
 
 
-def decode_result(text: str) -> tuple[str, list[tuple[Fact, bool | float]], str]:
-    """(outcome, observations, detail) from a result payload; ValueError if malformed.
+def encode_observations(observations: Iterable[tuple[Fact, bool | float]]) -> list[list[Any]]:
+    """Observations as JSON: ``[fact text, true/false]``, a numeric fluent's reading as
+    ``[atom text, number]`` (always with a fraction, see :func:`decode_observations`)."""
+    return [
+        [format_fact(fact), truth if isinstance(truth, bool) else float(truth)]
+        for fact, truth in observations
+    ]
 
-    An observation is ``[fact, true/false]``, or ``[atom, number]`` for a numeric
-    fluent's reading (``["(battery-level robot)", 20.9]``): a finite JSON number with a
-    fraction or exponent, as :func:`encode_result` writes it (``1`` is refused: a
-    truth written as a number is a mistake, not a reading).
-    """
+
+def decode_result(text: str) -> tuple[str, list[tuple[Fact, bool | float]], str]:
+    """(outcome, observations, detail) from a result payload; ValueError if malformed
+    (the observations as :func:`decode_observations` reads them)."""
     if not isinstance(text, str) or len(text) > MAX_PAYLOAD:
         raise ValueError("the result payload is not a string of bounded size")
     data: Any = json.loads(text)
@@ -142,7 +144,19 @@ def decode_result(text: str) -> tuple[str, list[tuple[Fact, bool | float]], str]
     outcome = data.get("outcome")
     if outcome not in ("succeeded", "aborted"):
         raise ValueError(f"the result outcome {outcome!r} is not succeeded or aborted")
-    raw = data.get("observations", [])
+    observations = decode_observations(data.get("observations", []))
+    detail = data.get("detail", "")
+    return outcome, observations, str(detail)[:1000]
+
+
+def decode_observations(raw: Any) -> list[tuple[Fact, bool | float]]:
+    """The observations of :func:`encode_observations`' JSON; ValueError if malformed.
+
+    An observation is ``[fact, true/false]``, or ``[atom, number]`` for a numeric
+    fluent's reading (``["(battery-level robot)", 20.9]``): a finite JSON number with a
+    fraction or exponent (``1`` is refused: a truth written as a number is a mistake,
+    not a reading).
+    """
     if not isinstance(raw, list):
         raise ValueError("observations must be a list of [fact, true/false] pairs")
     observations: list[tuple[Fact, bool | float]] = []
@@ -160,8 +174,7 @@ def decode_result(text: str) -> tuple[str, list[tuple[Fact, bool | float]], str]
                 f"(nor [atom, number] for a numeric fluent)"
             )
         observations.append((parse_fact(item[0]), item[1]))
-    detail = data.get("detail", "")
-    return outcome, observations, str(detail)[:1000]
+    return observations
 
 
 def task_digest(task: PlanningTask) -> str:
