@@ -390,7 +390,8 @@ class OrderExecutive(Executive):
     def _no_plan_for(self, state: OrderState, result: Any) -> None:
         """No plan reaches ``state``'s goal: refused when it never started, else failed."""
         why = f"no plan for it ({result.status.value}): {result.explanation}"
-        out, gone = self._out_now(), self._gone()
+        gone = self._gone()
+        out = self._out_now(gone)
         things = {arg for atom in state.atoms for arg in atom[1:]}
         # What a robot left out of plans has of the order's things (a parcel it carries).
         held = sorted(
@@ -497,10 +498,11 @@ class OrderExecutive(Executive):
             f"failed past recovery; the other robots take its orders",
         )
 
-    def _out_now(self) -> set[str]:
-        """The robots left out of plans now: benched, or gone."""
+    def _out_now(self, gone: frozenset[str] | None = None) -> set[str]:
+        """The robots left out of plans now: benched, or gone (``gone``: as just asked)."""
         now = self.now()
-        return {r for r, until in self.benched.items() if until > now} | self._gone()
+        benched = {r for r, until in self.benched.items() if until > now}
+        return benched | (self._gone() if gone is None else gone)
 
     def _without_benched(self, facts: FactSnapshot) -> FactSnapshot:
         """``facts`` without those of the robots benched or gone now."""
@@ -512,7 +514,7 @@ class OrderExecutive(Executive):
                 f"not there): left out of plans, the other robots take its orders",
             )
         self._announced_gone = gone
-        out = self._out_now()
+        out = self._out_now(gone)
         if not out:
             return facts
         kept = [f for f in facts if not any(arg in out for arg in f[1:])]

@@ -371,12 +371,14 @@ class RobotConnection:
         heartbeat, once heard, stopped for ``HEARTBEAT_TIMEOUT`` (3 s: the project's
         own check, whatever the middleware), or when its ``info`` service left the ROS
         graph (a crashed process leaves it when its DDS lease expires: 2 s for
-        ``skill_server``'s default ``--lease``).
+        ``skill_server``'s default ``--lease``). A robot's own node is gone with its
+        world node too.
         """
-        if self._parent is not None:
-            world_gone = self._parent.lost()
-            if world_gone is not None:
-                return world_gone
+        world_gone = self._parent.lost() if self._parent is not None else None
+        return world_gone or self._own_loss()
+
+    def _own_loss(self) -> str | None:
+        """Why this node is gone, its world node aside (None while it is there)."""
         if self.process is not None and self.process.poll() is not None:
             return f"the {self._kind} exited (code {self.process.returncode})"
         if self.node is None:
@@ -434,8 +436,11 @@ class RobotConnection:
         return f"{self.robot_info.get('mode')} on the robot node /{self.prefix}"
 
     def robots_gone(self) -> set[str]:
-        """The robots whose own node is gone (:meth:`lost`): none without ``robot_nodes``."""
-        return {name for name, member in self.members.items() if member.lost() is not None}
+        """The robots whose own node is gone (:meth:`lost`): none without ``robot_nodes``,
+        all of them when the world node is gone."""
+        if self.members and self.lost() is not None:
+            return set(self.members)
+        return {name for name, member in self.members.items() if member._own_loss() is not None}
 
     def world(self) -> RobotWorld:
         """The robot's world as the executive sees it (a :class:`World`)."""
