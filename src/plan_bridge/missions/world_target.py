@@ -115,10 +115,8 @@ class WorldTarget(Target):
         return self.view
 
     def robots(self) -> list[str]:
-        """The world's robots, by their lower-case (PDDL) names."""
-        if self.view is not None:
-            return self.view.robots()
-        return sorted(name for name, kind in self.task.objects.items() if kind == "bot")
+        """The world's robots, by their lower-case (PDDL) names (of its map)."""
+        return self.view.robots() if self.view is not None else []
 
     def planner_for(self, inner: Planner) -> Planner:
         """A fleet planner over ``inner`` (with one robot it plans as ``inner``)."""

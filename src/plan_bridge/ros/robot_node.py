@@ -139,15 +139,14 @@ def _load(args: argparse.Namespace) -> _Robot:
     )
     robosim = isinstance(target, WorldTarget)
     if args.robot is not None:
-        robots = target.robots() if isinstance(target, WorldTarget) else []
+        if not isinstance(target, WorldTarget):
+            raise PlanBridgeError(
+                f"--robot {args.robot}: a robot of its own process is for pyrobosim worlds only"
+            )
+        robots = target.robots()
         if args.robot.lower() not in robots:
             raise PlanBridgeError(
-                f"--robot {args.robot}: "
-                + (
-                    f"no such robot in {target.name}; robots: {', '.join(robots)}"
-                    if robosim
-                    else "a robot of its own process is for pyrobosim worlds only"
-                )
+                f"--robot {args.robot}: no such robot in {target.name}; robots: {', '.join(robots)}"
             )
         args.robot = args.robot.lower()
     symbolic = not target.has_own_skills

@@ -200,3 +200,11 @@ def test_a_robot_node_of_no_such_robot_exits_2_naming_the_robots() -> None:
     assert node.returncode == 2
     assert "--robot zed: no such robot in robosim_two_robots; robots: ada, bob" in output
     assert "Traceback" not in output
+
+
+@pytest.mark.timeout(60)
+def test_a_robot_node_of_a_domain_without_a_pyrobosim_world_exits_2() -> None:
+    node = skill_server(str(ROOT / "domains" / "fetch_drink"), "--robot", "pr2")
+    output, _ = node.communicate(timeout=50)
+    assert node.returncode == 2
+    assert "--robot pr2: a robot of its own process is for pyrobosim worlds only" in output
