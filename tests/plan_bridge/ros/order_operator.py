@@ -7,6 +7,7 @@ import json
 import threading
 from typing import Any
 
+from ros_context import call_text_service
 from std_msgs.msg import String
 from std_srvs.srv import Trigger
 from test_msgs.srv import BasicTypes
@@ -43,20 +44,14 @@ class Operator:
 
     def call(self, service: str, text: str = "") -> tuple[bool, str]:
         kind = Trigger if service == "list" else BasicTypes
-        client = self.node.create_client(kind, f"{self.base}/{service}")
-        try:
-            assert client.wait_for_service(timeout_sec=20), f"no service {service}"
-            request = kind.Request()
-            if kind is BasicTypes:
-                request.string_value = text
-            future = client.call_async(request)
-            assert wait_until(future.done, 20), f"{service} did not answer"
-            reply = future.result()
-        finally:
-            self.node.destroy_client(client)
-        if kind is Trigger:
-            return reply.success, reply.message
-        return reply.bool_value, reply.string_value
+        return call_text_service(
+            self.node,
+            f"{self.base}/{service}",
+            kind,
+            text,
+            timeout=20,
+            wait=lambda future: wait_until(future.done, 20),
+        )
 
     def statuses(self, order: str) -> list[str]:
         return [m["status"] for m in list(self.status) if m["id"] == order]

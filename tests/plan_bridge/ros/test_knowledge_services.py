@@ -13,6 +13,7 @@ import pytest
 
 pytest.importorskip("smach.ros.rclpy_api", reason="needs rclpy (the ros extra)")
 
+from ros_context import call_text_service
 from std_msgs.msg import String
 from std_srvs.srv import Trigger
 from test_msgs.srv import BasicTypes
@@ -79,21 +80,15 @@ class Client:
 
     def __call__(self, service: str, text: str = "", flag: bool = False) -> tuple[bool, str]:
         kind = Trigger if service.startswith(("get_", "clear_")) else BasicTypes
-        client = self.node.create_client(kind, f"{self.base}/{service}")
-        try:
-            assert client.wait_for_service(timeout_sec=10), f"no service {service}"
-            request = kind.Request()
-            if kind is BasicTypes:
-                request.string_value, request.bool_value = text, flag
-            future = client.call_async(request)
-            self.executor.spin_until_future_complete(future, timeout_sec=10)
-            assert future.done(), f"{service} did not answer"
-            reply = future.result()
-        finally:
-            self.node.destroy_client(client)
-        if kind is Trigger:
-            return reply.success, reply.message
-        return reply.bool_value, reply.string_value
+        return call_text_service(
+            self.node,
+            f"{self.base}/{service}",
+            kind,
+            text,
+            flag,
+            timeout=10,
+            wait=lambda future: self.executor.spin_until_future_complete(future, timeout_sec=10),
+        )
 
     def close(self) -> None:
         self.executor.remove_node(self.node)
