@@ -184,8 +184,7 @@ def _meta(args: argparse.Namespace, robot: _Robot) -> dict[str, Any]:
         "time_scale": args.time_scale if not robot.symbolic else None,
         "action_time": args.action_time if robot.symbolic else None,
     }
-    if robot.robosim:
-        assert isinstance(target, WorldTarget)
+    if isinstance(target, WorldTarget):
         meta.update(
             goal=target.goal_text,
             goal_name=target.goal_name,
